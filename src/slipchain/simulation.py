@@ -1,0 +1,255 @@
+"""Run one realisation: compiled chunks, observables between chunks, checks, an xarray result.
+
+Loop order (each chunk): the backend advances ``chunk`` samples of ``sample_steps`` steps each
+in compiled code, accumulating per sample the mean driving force f_d and the mean layer
+displacements, and per contact the sums of force, velocity, velocity squared and slow steps.
+Python then (1) appends these, (2) stops with status ``diverged`` if a row went non-finite,
+(3) in automatic mode, estimates mu_star on what has been sampled so far (MSER transient, batch
+means) and stops once its standard error is below ``sem_target`` and the steady window shows no
+drift, or at ``t_max``. After the loop: energy balance and displacement checks, then the Dataset.
+
+mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (MODEL.md, "Start and measurement").
+"""
+
+from __future__ import annotations
+
+import sys
+import time as _time
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+import xarray as xr
+
+from . import kernel as K
+from ._version import __version__
+from .backend import SLOW_FRACTION, Batch, get_backend
+from .checks import CheckResult, displacement_check, energy_check, stored_energy
+from .config import Config, make_config
+from .observables import steady_estimate
+from .system import System, build_system, initial_state
+
+CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
+MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
+
+COMPLETED, DIVERGED, INTERRUPTED = "completed", "diverged", "interrupted"
+
+
+@dataclass
+class _Recorder:
+    """Collects chunk outputs of one realisation."""
+
+    samples: list[np.ndarray] = field(default_factory=list)
+    contact_sums: list[np.ndarray] = field(default_factory=list)
+    chunk_starts: list[int] = field(default_factory=list)
+    works: np.ndarray = field(default_factory=lambda: np.zeros(K.N_ACC))
+    n: int = 0
+
+    def add(self, out: np.ndarray, acc: np.ndarray, cacc: np.ndarray) -> None:
+        self.chunk_starts.append(self.n)
+        self.samples.append(out.copy())
+        self.contact_sums.append(cacc.copy())
+        self.works += acc
+        self.n += out.shape[0]
+
+    def series(self) -> np.ndarray:
+        if not self.samples:
+            return np.zeros((0, K.N_OUT))
+        return np.concatenate(self.samples)
+
+
+def mu_star_norm(system: System) -> float:
+    """epsilon*f0*theta with the realised theta = N_c/N: f_d / this = mu_star."""
+    cfg = system.config
+    return cfg.epsilon * cfg.f0 * system.theta_realised
+
+
+def run(config: Config | Mapping[str, Any] | None = None, *, progress: bool | None = None) -> xr.Dataset:
+    """Run the model for ``config`` (a Config, a mapping of overrides, or None for defaults)."""
+    cfg = config if isinstance(config, Config) else make_config(dict(config or {}))
+    return simulate(build_system(cfg), progress=progress)
+
+
+def simulate(system: System, *, progress: bool | None = None) -> xr.Dataset:
+    """Integrate one realisation and return its result Dataset (see module docstring)."""
+    cfg = system.config
+    backend = get_backend(cfg.backend)
+    state0 = initial_state(system)
+    batch = Batch.pack([system], [state0])
+    e0 = stored_energy(system, state0)
+    steps_per_sample = cfg.sample_steps
+    interval = steps_per_sample * cfg.dt
+    chunk = max(1, int(round(CHUNK_TIME / interval)))
+    auto = cfg.t_total is None
+    limit = max(1, int(round((cfg.t_max if auto else cfg.t_total) / interval)))
+    norm = mu_star_norm(system)
+    nc = system.n_contacts
+
+    rec = _Recorder()
+    status, message = COMPLETED, ""
+    sem_reached = not auto
+    wall0 = _time.perf_counter()
+    bar = _Progress(progress, limit * interval, auto)
+    try:
+        while rec.n < limit:
+            n = min(chunk, limit - rec.n)
+            co = backend.advance(batch, n, steps_per_sample)
+            rec.add(co.out[0], co.acc[0], co.cacc[0, :, :nc].T)
+            if batch.status[0] >= 0:
+                step = int(batch.status[0])
+                status = DIVERGED
+                message = f"non-finite state at step {step} (t = {step * cfg.dt:.6e} s)"
+                break
+            sem = float("nan")
+            if auto:
+                est = steady_estimate(rec.series()[:, K.O_FD] / norm)
+                sem = est.sem
+                if est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target:
+                    sem_reached = True
+                    break
+            bar.update(rec.n * interval, sem, _time.perf_counter() - wall0)
+    except KeyboardInterrupt:
+        status, message = INTERRUPTED, f"interrupted by the user at t = {rec.n * interval:.6e} s"
+    finally:
+        bar.close()
+    wall = _time.perf_counter() - wall0
+    if auto and status == COMPLETED and not sem_reached:
+        message = f"t_max = {cfg.t_max:g} s reached before the standard error fell below sem_target = {cfg.sem_target:g}"
+    final = batch.state(0)
+    return _assemble(system, rec, final, e0, norm, interval, steps_per_sample, status, message, sem_reached, wall)
+
+
+def _assemble(system: System, rec: _Recorder, final, e0: float, norm: float, interval: float,
+              steps_per_sample: int, status: str, message: str, sem_reached: bool, wall: float) -> xr.Dataset:
+    cfg = system.config
+    series = rec.series()
+    fd = series[:, K.O_FD]
+    n = fd.size
+    est = steady_estimate(fd / norm) if n else None
+    start = est.start if est else 0
+    checks: list[CheckResult] = []
+    if status != DIVERGED and n:
+        checks.append(energy_check(stored_energy(system, final) - e0, *rec.works))
+        if est is not None and est.n_samples >= 2:
+            x_end = series[-1, K.O_XMEAN]
+            x_start = series[start - 1, K.O_XMEAN] if start > 0 else float(np.mean(initial_state(system).x))
+            v_mean = (x_end - x_start) / ((n - start) * interval)
+            checks.append(displacement_check(v_mean, cfg.v_d))
+        failed = [c for c in checks if not c.passed]
+        if failed and status == COMPLETED:
+            status = DIVERGED
+            message = "physics check failed at the end of the run (t = %.6e s): %s" % (
+                n * interval, "; ".join(c.message for c in failed))
+
+    # Per-contact averages over the chunks that lie wholly in the steady window.
+    sums = np.zeros((system.n_contacts, K.N_CACC))
+    steady_steps = 0
+    for s0, cs, smp in zip(rec.chunk_starts, rec.contact_sums, rec.samples):
+        if s0 >= start:
+            sums += cs
+            steady_steps += smp.shape[0] * steps_per_sample
+    with np.errstate(invalid="ignore", divide="ignore"):
+        denom = steady_steps if steady_steps else np.nan
+        f_mean = sums[:, K.C_F] / denom
+        u_mean = sums[:, K.C_U] / denom
+        u_std = np.sqrt(np.maximum(sums[:, K.C_U2] / denom - u_mean**2, 0.0))
+        slow = sums[:, K.C_SLOW] / denom
+
+    time = (np.arange(n) + 1) * interval
+    ds = xr.Dataset(
+        data_vars={
+            "f_d": ("time", fd, {"units": "N", "long_name": "driving force per block f_d, mean over the output interval ending at time"}),
+            "x_mean": ("time", series[:, K.O_XMEAN], {"units": "m", "long_name": "mean interface-layer displacement"}),
+            "X_mean": ("time", series[:, K.O_XUMEAN], {"units": "m", "long_name": "mean upper-layer displacement"}),
+            "contact_site": ("contact", system.contact_sites, {"long_name": "interface block carrying the contact"}),
+            "vstar": ("contact", system.vstar, {"units": "m/s", "long_name": "contact velocity scale v*_i"}),
+            "contact_force_mean": ("contact", f_mean, {"units": "N", "long_name": "time-averaged contact force, steady window"}),
+            "contact_velocity_mean": ("contact", u_mean, {"units": "m/s"}),
+            "contact_velocity_std": ("contact", u_std, {"units": "m/s"}),
+            "contact_slow_fraction": ("contact", slow, {"long_name": f"fraction of steady steps with |u| < {SLOW_FRACTION:g} v_d"}),
+            "x": ("block", final.x, {"units": "m", "long_name": "final interface-layer displacements"}),
+            "u": ("block", final.u, {"units": "m/s", "long_name": "final interface-layer velocities"}),
+            "X": ("block", final.X, {"units": "m", "long_name": "final upper-layer displacements"}),
+            "U": ("block", final.U, {"units": "m/s", "long_name": "final upper-layer velocities"}),
+        },
+        coords={"time": ("time", time, {"units": "s"}), "contact": np.arange(system.n_contacts), "block": np.arange(cfg.N)},
+    )
+    attrs: dict[str, Any] = {
+        "title": "slipchain two-chain friction model run",
+        "slipchain_version": __version__,
+        "status": status,
+        "message": message,
+        "config": cfg.to_toml(),
+        "seed": cfg.seed,
+        "mu_star": est.mean if est else np.nan,
+        "mu_star_sem": est.sem if est else np.nan,
+        "t_transient": start * interval,
+        "t_steady": (n - start) * interval,
+        "sem_target_reached": int(sem_reached),
+        "theta": system.theta_realised,
+        "n_contacts": system.n_contacts,
+        "N": cfg.N,
+        "v_d": cfg.v_d,
+        "eta_c": cfg.eta_c,
+        "epsilon": cfg.epsilon,
+        "dt": cfg.dt,
+        "t_total": n * interval,
+        "steps": int(final.step),
+        "wall_time_s": wall,
+        "mu_star_norm": norm,
+        "W_drive": rec.works[K.A_WDRIVE],
+        "W_damping": rec.works[K.A_WDAMP],
+        "W_contacts": rec.works[K.A_WCONTACT],
+    }
+    for c in checks:
+        attrs[f"check_{c.name}"] = c.value
+        attrs[f"check_{c.name}_passed"] = int(c.passed)
+    ds.attrs.update(attrs)
+    return ds
+
+
+SUMMARY_KEYS = ("mu_star", "mu_star_sem", "theta", "n_contacts", "N", "v_d", "eta_c", "epsilon", "seed",
+                "dt", "t_total", "t_transient", "steps", "wall_time_s", "status", "message")
+
+
+def summary(ds: xr.Dataset) -> dict[str, Any]:
+    """The run's headline numbers as plain Python values (the CLI's --json)."""
+    out: dict[str, Any] = {}
+    for key in SUMMARY_KEYS:
+        v = ds.attrs.get(key)
+        if isinstance(v, np.generic):
+            v = v.item()
+        if isinstance(v, float) and not np.isfinite(v):
+            v = None
+        out[key] = v
+    return out
+
+
+class _Progress:
+    """A rich progress bar, shown on a terminal once a run has taken more than a few seconds."""
+
+    def __init__(self, enabled: bool | None, total_time: float, auto: bool):
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.total = total_time
+        self.auto = auto
+        self._bar = None
+        self._task = None
+
+    def update(self, t: float, sem: float, elapsed: float) -> None:
+        if not self.enabled or elapsed < 2.0:
+            return
+        if self._bar is None:
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+            self._bar = Progress(TextColumn("[bold]slipchain run"), BarColumn(),
+                                 TextColumn("{task.completed:.4f}/{task.total:.4f} s simulated"),
+                                 TextColumn("{task.fields[info]}"), TimeElapsedColumn(), TimeRemainingColumn())
+            self._bar.start()
+            label = "up to t_max; stops at sem_target" if self.auto else ""
+            self._task = self._bar.add_task("run", total=self.total, info=label)
+        info = f"SE(mu*) = {sem:.4f}" if np.isfinite(sem) else ""
+        self._bar.update(self._task, completed=t, info=info)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
