@@ -27,7 +27,7 @@ from .backend import SLOW_FRACTION, Batch, get_backend
 from .checks import CheckResult, displacement_check, energy_check, stored_energy
 from .config import Config, make_config
 from .observables import steady_estimate
-from .system import System, build_system, initial_state
+from .system import State, System, build_system, initial_state
 
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
 MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
@@ -59,9 +59,13 @@ class _Recorder:
 
 
 def mu_star_norm(system: System) -> float:
-    """epsilon*f0*theta with the realised theta = N_c/N: f_d / this = mu_star."""
+    """epsilon*f0*theta with the realised theta = N_c/N: f_d / this = mu_star.
+
+    Without contacts mu_star is undefined; the series is then normalised by epsilon*f0 alone
+    (for the transient and error estimates) and mu_star is reported as NaN.
+    """
     cfg = system.config
-    return cfg.epsilon * cfg.f0 * system.theta_realised
+    return cfg.epsilon * cfg.f0 * (system.theta_realised if system.n_contacts else 1.0)
 
 
 def run(config: Config | Mapping[str, Any] | None = None, *, progress: bool | None = None) -> xr.Dataset:
@@ -70,11 +74,11 @@ def run(config: Config | Mapping[str, Any] | None = None, *, progress: bool | No
     return simulate(build_system(cfg), progress=progress)
 
 
-def simulate(system: System, *, progress: bool | None = None) -> xr.Dataset:
-    """Integrate one realisation and return its result Dataset (see module docstring)."""
+def simulate(system: System, state: State | None = None, *, progress: bool | None = None) -> xr.Dataset:
+    """Integrate one realisation from ``state`` (default: the config's start) to a result Dataset."""
     cfg = system.config
     backend = get_backend(cfg.backend)
-    state0 = initial_state(system)
+    state0 = initial_state(system) if state is None else state.copy()
     batch = Batch.pack([system], [state0])
     e0 = stored_energy(system, state0)
     steps_per_sample = cfg.sample_steps
@@ -116,10 +120,10 @@ def simulate(system: System, *, progress: bool | None = None) -> xr.Dataset:
     if auto and status == COMPLETED and not sem_reached:
         message = f"t_max = {cfg.t_max:g} s reached before the standard error fell below sem_target = {cfg.sem_target:g}"
     final = batch.state(0)
-    return _assemble(system, rec, final, e0, norm, interval, steps_per_sample, status, message, sem_reached, wall)
+    return _assemble(system, rec, final, float(np.mean(state0.x)), e0, norm, interval, steps_per_sample, status, message, sem_reached, wall)
 
 
-def _assemble(system: System, rec: _Recorder, final, e0: float, norm: float, interval: float,
+def _assemble(system: System, rec: _Recorder, final: State, x0_mean: float, e0: float, norm: float, interval: float,
               steps_per_sample: int, status: str, message: str, sem_reached: bool, wall: float) -> xr.Dataset:
     cfg = system.config
     series = rec.series()
@@ -132,7 +136,7 @@ def _assemble(system: System, rec: _Recorder, final, e0: float, norm: float, int
         checks.append(energy_check(stored_energy(system, final) - e0, *rec.works))
         if est is not None and est.n_samples >= 2:
             x_end = series[-1, K.O_XMEAN]
-            x_start = series[start - 1, K.O_XMEAN] if start > 0 else float(np.mean(initial_state(system).x))
+            x_start = series[start - 1, K.O_XMEAN] if start > 0 else x0_mean
             v_mean = (x_end - x_start) / ((n - start) * interval)
             checks.append(displacement_check(v_mean, cfg.v_d))
         failed = [c for c in checks if not c.passed]
@@ -181,8 +185,8 @@ def _assemble(system: System, rec: _Recorder, final, e0: float, norm: float, int
         "message": message,
         "config": cfg.to_toml(),
         "seed": cfg.seed,
-        "mu_star": est.mean if est else np.nan,
-        "mu_star_sem": est.sem if est else np.nan,
+        "mu_star": est.mean if est and system.n_contacts else np.nan,
+        "mu_star_sem": est.sem if est and system.n_contacts else np.nan,
         "t_transient": start * interval,
         "t_steady": (n - start) * interval,
         "sem_target_reached": int(sem_reached),
