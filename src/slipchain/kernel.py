@@ -12,8 +12,10 @@ Scheme (one step n -> n+1, dt):
  2. Velocities: U^{n+1} = U^n + dt F/(N_L m); IL blocks without a contact likewise.
  3. IL blocks with a contact: backward Euler in the contact force alone, a scalar equation
         m u + dt f(u, v*) = r,    r = m u^n + dt F_i,
-    solved to machine precision by Newton's method in y = log10(|u|/v*) (warm-started from the
-    previous step, safeguarded by bisection on a bracket that always contains the root).
+    solved by Newton's method in y = log10(|u|/v*), warm-started from the previous step: one
+    branch-free step for all contacts (:func:`newton_pass`), accepted when below NEWTON_TOL = 1e-5
+    decades (error left < 3e-10 decades); the others continue in :func:`solve_contact`, whose
+    last resort is bisection-safeguarded Newton on a bracket that always contains the root.
  4. Positions: x^{n+1} = x^n + dt u^{n+1}, X^{n+1} = X^n + dt U^{n+1}.
 
 Without contacts and damping this is symplectic Euler: first order in the velocities
