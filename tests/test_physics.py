@@ -96,3 +96,13 @@ def test_check_functions_fail_when_they_should():
     assert not energy_check(1.0, 2.0, -0.5, -0.4).passed  # 0.1 J unaccounted for
     assert displacement_check(1.05e-3, 1e-3).passed
     assert not displacement_check(0.5e-3, 1e-3).passed
+
+
+def test_automatic_length_does_not_stop_during_loading():
+    # Regression: at N = 101, theta = 0.5 the standard error fell below its target while the
+    # springs were still loading (slider at 0.8 v_d). The automatic stop now also requires the
+    # slider to follow the drive, so the after-run checks pass.
+    ds = run(dict(N=101, theta=0.5))
+    assert ds.attrs["status"] == "completed", ds.attrs["message"]
+    assert ds.attrs["check_slider_follows_drive"] <= 0.05
+    assert ds.attrs["mu_star_sem"] <= 0.01

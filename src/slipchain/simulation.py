@@ -24,7 +24,7 @@ import xarray as xr
 from . import kernel as K
 from ._version import __version__
 from .backend import SLOW_FRACTION, Batch, get_backend
-from .checks import CheckResult, displacement_check, energy_check, stored_energy
+from .checks import DISPLACEMENT_RTOL, CheckResult, displacement_check, energy_check, stored_energy
 from .config import Config, make_config
 from .observables import steady_estimate
 from .system import State, System, build_system, initial_state
@@ -89,6 +89,7 @@ def simulate(system: System, state: State | None = None, *, progress: bool | Non
     norm = mu_star_norm(system)
     nc = system.n_contacts
 
+    x0_mean = float(np.mean(state0.x))
     rec = _Recorder()
     status, message = COMPLETED, ""
     sem_reached = not auto
@@ -106,9 +107,11 @@ def simulate(system: System, state: State | None = None, *, progress: bool | Non
                 break
             sem = float("nan")
             if auto:
-                est = steady_estimate(rec.series()[:, K.O_FD] / norm)
+                series = rec.series()
+                est = steady_estimate(series[:, K.O_FD] / norm)
                 sem = est.sem
-                if est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target:
+                if (est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target
+                        and _follows_drive(series, est.start, x0_mean, interval, cfg.v_d)):
                     sem_reached = True
                     break
             bar.update(rec.n * interval, sem, _time.perf_counter() - wall0)
@@ -120,7 +123,19 @@ def simulate(system: System, state: State | None = None, *, progress: bool | Non
     if auto and status == COMPLETED and not sem_reached:
         message = f"t_max = {cfg.t_max:g} s reached before the standard error fell below sem_target = {cfg.sem_target:g}"
     final = batch.state(0)
-    return _assemble(system, rec, final, float(np.mean(state0.x)), e0, norm, interval, steps_per_sample, status, message, sem_reached, wall)
+    return _assemble(system, rec, final, x0_mean, e0, norm, interval, steps_per_sample, status, message, sem_reached, wall)
+
+
+def _window_velocity(series: np.ndarray, start: int, x0_mean: float, interval: float) -> float:
+    """Mean interface-layer velocity from sample ``start`` to the end of ``series``."""
+    x_start = series[start - 1, K.O_XMEAN] if start > 0 else x0_mean
+    return float((series[-1, K.O_XMEAN] - x_start) / ((series.shape[0] - start) * interval))
+
+
+def _follows_drive(series: np.ndarray, start: int, x0_mean: float, interval: float, v_d: float) -> bool:
+    """Automatic stop only once the window is past loading: the slider moves at v_d within half
+    the tolerance of the after-run displacement check."""
+    return abs(_window_velocity(series, start, x0_mean, interval) / v_d - 1.0) <= 0.5 * DISPLACEMENT_RTOL
 
 
 def _assemble(system: System, rec: _Recorder, final: State, x0_mean: float, e0: float, norm: float, interval: float,
@@ -135,10 +150,7 @@ def _assemble(system: System, rec: _Recorder, final: State, x0_mean: float, e0: 
     if status != DIVERGED and n:
         checks.append(energy_check(stored_energy(system, final) - e0, *rec.works))
         if est is not None and est.n_samples >= 2:
-            x_end = series[-1, K.O_XMEAN]
-            x_start = series[start - 1, K.O_XMEAN] if start > 0 else x0_mean
-            v_mean = (x_end - x_start) / ((n - start) * interval)
-            checks.append(displacement_check(v_mean, cfg.v_d))
+            checks.append(displacement_check(_window_velocity(series, start, x0_mean, interval), cfg.v_d))
         failed = [c for c in checks if not c.passed]
         if failed and status == COMPLETED:
             status = DIVERGED
