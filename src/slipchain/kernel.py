@@ -62,23 +62,20 @@ FASTMATH = {"contract", "reassoc", "nsz", "arcp"}
 NEWTON_TOL = 1e-5  # accept after a Newton step in y (decades) below this: the error left,
 # ~|H''/2H'|*d**2 < 3e-10 decades, is a relative velocity error below 1e-9
 TAYLOR_MAX = 2e-3  # largest |z| for which the vectorised pass updates exp by its Taylor series
-SMALL_ARG = 1e-2  # exp(z) by its Taylor series for |z| below this
 
 
 
 @nb.njit(cache=True, inline="always")
-def _exp_small(z):
-    """exp(z) for |z| <= SMALL_ARG, Taylor series to z**7 (relative error < 1e-19)."""
-    return 1.0 + z * (1.0 + z * (0.5 + z * (1.0 / 6.0 + z * (1.0 / 24.0 + z * (1.0 / 120.0 + z * (1.0 / 720.0 + z / 5040.0))))))
+def _exp_taylor(z):
+    """exp(z) for |z| <= TAYLOR_MAX = 2e-3 by its Taylor series to z**5 (relative error < 1e-19)."""
+    return 1.0 + z * (1.0 + z * (0.5 + z * (1.0 / 6.0 + z * (1.0 / 24.0 + z / 120.0))))
 
 
 @nb.njit(cache=True, inline="always")
 def _scaled_exp(v, z):
-    """v*exp(z): multiplicative update, cheap for small z."""
-    if abs(z) <= 1e-4:  # Taylor series to z**4: relative error < 1e-22
-        return v * (1.0 + z * (1.0 + z * (0.5 + z * (1.0 / 6.0 + z / 24.0))))
-    if abs(z) <= SMALL_ARG:
-        return v * _exp_small(z)
+    """v*exp(z): multiplicative update, by the Taylor series for small z."""
+    if abs(z) <= TAYLOR_MAX:
+        return v * _exp_taylor(z)
     return v * math.exp(z)
 
 
@@ -118,9 +115,16 @@ def solve_contact_bracketed(ra, a, b, c, y):
 
 
 @nb.njit(cache=True, inline="always")
-def _exp_taylor(z):
-    """exp(z) for |z| <= 2e-3 by its Taylor series to z**5 (relative error < 1e-19)."""
-    return 1.0 + z * (1.0 + z * (0.5 + z * (1.0 / 6.0 + z * (1.0 / 24.0 + z / 120.0))))
+def _taylor_newton_step(a, b, c, ra, y, p, q):
+    """One Newton step in y for a*p + b*q = ra with p = 10**y, q = exp(-c y**2) updated by Taylor.
+
+    Returns (y, p, q, slope dH/dy at the start, step d, largest |exponent| used).
+    """
+    dh = LN10 * a * p - 2.0 * c * y * b * q
+    d = (a * p + b * q - ra) / dh
+    z = -LN10 * d
+    w = c * d * (2.0 * y - d)
+    return y - d, p * _exp_taylor(z), q * _exp_taylor(w), dh, d, max(abs(z), abs(w))
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -138,23 +142,12 @@ def newton_pass(nc, ra, vstar, ys, unew, ok, m_eff, b, c):
         y0 = ys[Y_LOG, k]
         p0 = ys[Y_P, k]
         q0 = ys[Y_Q, k]
-        dh1 = LN10 * a * p0 - 2.0 * c * y0 * b * q0
-        d1 = (a * p0 + b * q0 - ra[k]) / dh1
-        z1 = -LN10 * d1
-        w1 = c * d1 * (2.0 * y0 - d1)
-        p1 = p0 * _exp_taylor(z1)
-        q1 = q0 * _exp_taylor(w1)
-        y1 = y0 - d1
-        dh2 = LN10 * a * p1 - 2.0 * c * y1 * b * q1
-        d2 = (a * p1 + b * q1 - ra[k]) / dh2
-        z2 = -LN10 * d2
-        w2 = c * d2 * (2.0 * y1 - d2)
-        p2 = p1 * _exp_taylor(z2)
-        q2 = q1 * _exp_taylor(w2)
-        good = ((dh1 > 0.0) & (dh2 > 0.0) & (abs(d2) < NEWTON_TOL) & (abs(z1) <= TAYLOR_MAX)
-                & (abs(w1) <= TAYLOR_MAX) & (abs(w2) <= TAYLOR_MAX) & (ra[k] > 1e-300))
+        y1, p1, q1, dh1, _, e1 = _taylor_newton_step(a, b, c, ra[k], y0, p0, q0)
+        y2, p2, q2, dh2, d2, e2 = _taylor_newton_step(a, b, c, ra[k], y1, p1, q1)
+        good = ((dh1 > 0.0) & (dh2 > 0.0) & (abs(d2) < NEWTON_TOL) & (e1 <= TAYLOR_MAX)
+                & (e2 <= TAYLOR_MAX) & (ra[k] > 1e-300))
         ok[k] = good
-        ys[Y_LOG, k] = y1 - d2 if good else y0
+        ys[Y_LOG, k] = y2 if good else y0
         ys[Y_P, k] = p2 if good else p0
         ys[Y_Q, k] = q2 if good else q0
         unew[k] = vstar[k] * p2
@@ -200,6 +193,19 @@ def solve_contact(r, m_eff, b, c, vstar, y, p, q):
 
 
 
+@nb.njit(cache=True, inline="always")
+def _block_update(i, ip, im, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL):
+    """Explicit velocity update of IL block i and UL block i with neighbours ip, im."""
+    dx = meta * (ur[ip] + ur[im] + Ur[i] - 3.0 * ur[i])
+    dX = meta * (Ur[ip] + Ur[im] + ur[i] - 3.0 * Ur[i])
+    fx = K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i]) + dx
+    fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + dX
+    un[i] = ur[i] + dtm * fx
+    Un[i] = Ur[i] + dtmL * fX
+    dampx[i] = dx
+    dampX[i] = dX
+
+
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL):
     """Explicit velocity update of all blocks (springs, drive, damping); returns sum of drive forces.
@@ -208,23 +214,9 @@ def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, 
     """
     n = xr.size
     for i in range(1, n - 1):
-        dx = meta * (ur[i + 1] + ur[i - 1] + Ur[i] - 3.0 * ur[i])
-        dX = meta * (Ur[i + 1] + Ur[i - 1] + ur[i] - 3.0 * Ur[i])
-        fx = K * (xr[i + 1] + xr[i - 1] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i]) + dx
-        fX = KL * (Xr[i + 1] + Xr[i - 1] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + dX
-        un[i] = ur[i] + dtm * fx
-        Un[i] = Ur[i] + dtmL * fX
-        dampx[i] = dx
-        dampX[i] = dX
-    for i, ip, im in ((0, 1, n - 1), (n - 1, 0, n - 2)):
-        dx = meta * (ur[ip] + ur[im] + Ur[i] - 3.0 * ur[i])
-        dX = meta * (Ur[ip] + Ur[im] + ur[i] - 3.0 * Ur[i])
-        fx = K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i]) + dx
-        fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + dX
-        un[i] = ur[i] + dtm * fx
-        Un[i] = Ur[i] + dtmL * fX
-        dampx[i] = dx
-        dampX[i] = dX
+        _block_update(i, i + 1, i - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL)
+    _block_update(0, 1, n - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL)
+    _block_update(n - 1, 0, n - 2, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL)
     sx = 0.0
     for i in range(n):
         sx += Xr[i]
