@@ -1,7 +1,12 @@
-"""Command-line interface: ``slipchain run [CONFIG.toml] [--set name=value ...] [--out FILE.nc] [--json]``.
+"""Command-line interface.
 
-Exit codes: 0 completed; 1 diverged (the result is still written, with its message);
-2 rejected configuration (nothing written); 130 interrupted (the partial result is written).
+* ``slipchain run [CONFIG.toml] [--set name=value ...] [--out FILE.nc] [--json]``: one run.
+* ``slipchain sweep SWEEP.toml --store PATH [--scheduler ADDRESS] [--workers N]``: a sweep on Dask.
+* ``slipchain figure fig5 --out DIR`` and ``slipchain figure fig6 --store PATH --out DIR``.
+* ``slipchain reproduce [--preset quick|paper] [--store PATH] [--out DIR]``: the main job.
+
+Exit codes: 0 completed; 1 diverged or some members failed (results are still written, with
+their messages); 2 rejected input (nothing written); 130 interrupted (finished work is kept).
 """
 
 from __future__ import annotations
@@ -17,7 +22,9 @@ from rich.table import Table
 
 from .config import ConfigError, load_config
 from .io import write_dataset
+from .runner import SweepReport, run_sweep
 from .simulation import COMPLETED, DIVERGED, INTERRUPTED, simulate, summary
+from .sweep import PRESETS, SweepError, load_sweep_definition
 from .system import build_system
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -72,6 +79,129 @@ def _print_summary(info: dict, out: Path | None) -> None:
     if out is not None:
         table.add_row("written to", str(out))
     Console().print(table)
+
+
+def _fail(message: str) -> None:
+    err.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
+    raise typer.Exit(2)
+
+
+WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="Local cluster size (default: one process per core).")]
+SchedulerOpt = Annotated[Optional[str], typer.Option("--scheduler", help="Address of an existing Dask scheduler, e.g. tcp://host:8786.")]
+ProgressOpt = Annotated[Optional[bool], typer.Option("--progress/--no-progress", help="Progress bar (default: on a terminal).")]
+
+
+@app.command()
+def sweep(
+    definition: Annotated[Path, typer.Argument(help="Sweep TOML: [base] config plus [[grid]] tables of value lists.")],
+    store: Annotated[Path, typer.Option("--store", help="Store directory (created; rerun to resume).")],
+    scheduler: SchedulerOpt = None,
+    workers: WorkersOpt = None,
+    progress: ProgressOpt = None,
+) -> None:
+    """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
+    try:
+        sw = load_sweep_definition(definition)
+        report = run_sweep(sw, store, scheduler=scheduler, n_workers=workers, progress=progress)
+    except SweepError as e:
+        _fail(str(e))
+    print_sweep_report(report)
+    raise typer.Exit(_sweep_exit(report))
+
+
+def _sweep_exit(report: SweepReport) -> int:
+    return 130 if report.interrupted else (0 if report.ok else 1)
+
+
+def print_sweep_report(report: SweepReport, console: Console | None = None) -> None:
+    """The end-of-sweep table: what ran, what was skipped, what failed and why."""
+    console = console or Console()
+    table = Table(title=f"slipchain sweep: {report.store}")
+    table.add_column("members")
+    table.add_column("count", justify="right")
+    completed = [o for o in report.ran if o.status == COMPLETED]
+    table.add_row("ran, completed", str(len(completed)))
+    table.add_row("ran, failed", str(len(report.failed)))
+    table.add_row("skipped (already in the store)", str(len(report.skipped)))
+    table.add_row("not run" + (" (interrupted)" if report.interrupted else ""), str(report.not_run))
+    table.add_row("total", str(report.total))
+    table.add_row("wall time", f"{report.wall_time_s:.1f} s")
+    console.print(table)
+    if report.failed:
+        ft = Table(title="failed members (rerun on the next invocation)")
+        for col in ("member", "status", "reason"):
+            ft.add_column(col, overflow="fold")
+        for o in report.failed:
+            ft.add_row(o.member.label(), o.status, o.message)
+        console.print(ft)
+
+
+figure_app = typer.Typer(no_args_is_help=True, help="Draw the paper's figures from datasets (PNG and PDF).")
+app.add_typer(figure_app, name="figure")
+
+
+@figure_app.command("fig5")
+def figure_fig5(
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    config: Annotated[Optional[Path], typer.Option("--config", help="Base config TOML (default: the paper's).")] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Disorder of the N = 1001 contact average.")] = 0,
+) -> None:
+    """Fig. 5: eq. (1) for eta_c = 0, omega0, 0.3 omega0, 0.1 omega0 and the contact average (N = 1001, theta = 1)."""
+    from .figures import contact_law_dataset, plot_fig5
+
+    try:
+        cfg = load_config(config)
+    except ConfigError as e:
+        _fail(str(e))
+    for p in plot_fig5(contact_law_dataset(cfg, seed=seed), out):
+        Console().print(f"wrote {p}")
+
+
+@figure_app.command("fig6")
+def figure_fig6(
+    store: Annotated[Path, typer.Option("--store", help="Store of a Fig. 6 sweep (theta, eta_c, v_d; N, seed optional).")],
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+) -> None:
+    """Fig. 6: mu_star versus theta, three eta_c, two v_d, N = 1001 stars, the dashed line."""
+    from .figures import plot_fig6
+    from .store import Store
+
+    try:
+        ds = Store.open(store).dataset()
+    except SweepError as e:
+        _fail(str(e))
+    missing = {"theta", "eta_c", "v_d"} - set(ds.dims)
+    if missing:
+        _fail(f"store {str(store)!r} does not sweep {sorted(missing)}; fig6 needs theta, eta_c and v_d")
+    for p in plot_fig6(ds, out):
+        Console().print(f"wrote {p}")
+
+
+@app.command()
+def reproduce(
+    preset: Annotated[str, typer.Option("--preset", help=f"One of {', '.join(PRESETS)}.")] = "quick",
+    store: Annotated[Optional[Path], typer.Option("--store", help="Store directory (default results/fig6-PRESET/store).")] = None,
+    out: Annotated[Optional[Path], typer.Option("--out", help="Figures and report (default results/fig6-PRESET).")] = None,
+    scheduler: SchedulerOpt = None,
+    workers: WorkersOpt = None,
+    progress: ProgressOpt = None,
+) -> None:
+    """The main job: the Fig. 6 sweep (resumable), Figs. 5 and 6, and report.md with the paper's claims."""
+    from .reproduce import reproduce as _reproduce
+
+    if preset not in PRESETS:
+        _fail(f"option --preset has value {preset!r}; expected one of {', '.join(PRESETS)}")
+    command = " ".join(["slipchain", "reproduce", *sys.argv[2:]]) if len(sys.argv) > 1 else ""
+    try:
+        result = _reproduce(preset, store, out, scheduler=scheduler, n_workers=workers, progress=progress, command=command)
+    except SweepError as e:
+        _fail(str(e))
+    print_sweep_report(result.sweep)
+    if result.report is not None:
+        Console().print(f"report: {result.report}")
+        for p in result.figures:
+            Console().print(f"figure: {p}")
+    raise typer.Exit(_sweep_exit(result.sweep))
 
 
 def main() -> None:  # pragma: no cover - console entry point

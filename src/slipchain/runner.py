@@ -20,6 +20,7 @@ results travel back to the driver, which alone writes the store.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import sys
@@ -129,6 +130,7 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     """
     st = store if isinstance(store, Store) else Store.open(store, sweep)
     t0 = time.perf_counter()
+    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     done = st.completed_ids()
     report = SweepReport(store=st.path, total=len(st.sweep.members),
                          skipped=[m for m in st.sweep.members if m.id in done])
@@ -147,6 +149,11 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
         bar.close()
         report.wall_time_s = time.perf_counter() - t0
         st.write_index()
+        st.log_invocation({"started": started, "wall_time_s": report.wall_time_s, "ran": len(report.ran),
+                           "failed": len(report.failed), "skipped": len(report.skipped), "total": report.total,
+                           "interrupted": report.interrupted, "scheduler": scheduler or ("client" if client else "local"),
+                           "n_workers": n_workers or (None if scheduler or client else default_workers()),
+                           "slipchain_version": __version__})
     return report
 
 

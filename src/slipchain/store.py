@@ -9,6 +9,7 @@ Layout of a store directory::
                         the reason in ``message``); rerun on resume, removed once it completes
     index.csv           one row per member (point, status, mu_star, ...): a readable summary,
                         rebuilt from the files above, never the source of truth
+    invocations.jsonl   one line per sweep invocation (start, wall time, counts): a log
 
 Why per-member files (and not one Zarr array): every member is written exactly once, by one
 process, with :func:`slipchain.io.write_dataset` (temporary file + ``os.replace``), so a crash
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 from pathlib import Path
 from typing import Any
@@ -37,6 +39,7 @@ DEFINITION = "sweep.toml"
 MEMBERS = "members"
 FAILED = "failed"
 INDEX = "index.csv"
+LOG = "invocations.jsonl"
 
 # Per-member numbers gathered into the sweep Dataset: variable -> (attr of the member file, meaning).
 SUMMARY_VARS: dict[str, tuple[str, str]] = {
@@ -200,6 +203,23 @@ class Store:
         path = self.path / INDEX
         _write_text_atomic(path, buf.getvalue())
         return path
+
+    def log_invocation(self, record: dict[str, Any]) -> None:
+        """Append one line to invocations.jsonl (a log for people and reports; losing a line loses nothing)."""
+        with (self.path / LOG).open("a") as fh:
+            fh.write(json.dumps(record) + "\n")
+
+    def invocations(self) -> list[dict[str, Any]]:
+        path = self.path / LOG
+        if not path.exists():
+            return []
+        out = []
+        for line in path.read_text().splitlines():
+            try:
+                out.append(json.loads(line))
+            except json.JSONDecodeError:  # a line cut by a kill
+                continue
+        return out
 
 
 def open_sweep(path: str | os.PathLike) -> xr.Dataset:

@@ -1,0 +1,138 @@
+"""Figures 5 and 6 of the paper, drawn from Datasets (never from live simulations).
+
+* Fig. 5: :func:`contact_law_dataset` evaluates eq. (1), f(v, v0), for several contact dampings
+  and the contact average <f(v, v*_i)> over the v*_i of one realisation (N = 1001, theta = 1);
+  :func:`plot_fig5` draws it on a log-v axis, in units of epsilon*f0.
+* Fig. 6: :func:`plot_fig6` draws seed-averaged mu_star versus theta from a sweep Dataset:
+  eta_c = omega0 blue circles, 0.3 omega0 red diamonds, 0.1 omega0 black squares (as the paper),
+  filled for v_d1 = v0, open for v_d2; N = 1001 as stars; the dashed line f(v_d2, v0)/(epsilon f0).
+
+Every plot is written as PNG and PDF.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .config import Config, make_config
+from .reproduction import MAIN_N, base_config, dashed_line, fig6_table
+
+FIG5_ETA_FACTORS = (0.0, 1.0, 0.3, 0.1)  # eta_c / omega0, the curves of Fig. 5
+ETA_STYLE = {1.0: ("tab:blue", "o"), 0.3: ("tab:red", "D"), 0.1: ("black", "s")}  # Fig. 6 symbols
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def contact_law_dataset(config: Config | None = None, *, N: int = 1001, theta: float = 1.0, seed: int = 0,
+                        v_min: float = 1e-7, v_max: float = 1.0, points: int = 600) -> xr.Dataset:
+    """eq. (1) on a log-v grid: f(v, v0) for each eta_c of Fig. 5 and the contact average.
+
+    The average <f(v, v*_i)> = N_c^-1 sum_i f(v, v*_i) uses the v*_i of the realisation
+    (``N``, ``theta``, ``seed``) and the config's eta_c.
+    """
+    from .system import build_system
+
+    cfg = config or make_config()
+    v = np.geomspace(v_min, v_max, points)
+    scale = cfg.epsilon * cfg.f0
+    curves = np.array([cfg.with_updates(eta_c=k * cfg.omega0).contact_law.force(v, cfg.v0) / scale
+                       for k in FIG5_ETA_FACTORS])
+    system = build_system(cfg.with_updates(N=N, theta=theta, seed=seed))
+    avg = cfg.contact_law.average(v, system.vstar) / scale
+    return xr.Dataset(
+        {"f": (("eta_c_factor", "v"), curves, {"long_name": "f(v, v0)/(epsilon f0), eq. (1)"}),
+         "f_average": ("v", avg, {"long_name": "<f(v, v*_i)>/(epsilon f0) over the contacts of one realisation"})},
+        coords={"v": ("v", v, {"units": "m/s"}), "eta_c_factor": list(FIG5_ETA_FACTORS)},
+        attrs={"N": N, "theta": theta, "seed": seed, "n_contacts": system.n_contacts, "eta_c_average": cfg.eta_c,
+               "omega0": cfg.omega0, "v0": cfg.v0, "config": cfg.to_toml()},
+    )
+
+
+def _save(fig, out: str | os.PathLike, stem: str) -> list[Path]:
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for ext in ("png", "pdf"):
+        p = out / f"{stem}.{ext}"
+        tmp = p.with_name(f".{p.name}.tmp")
+        fig.savefig(tmp, dpi=150, bbox_inches="tight", format=ext)
+        os.replace(tmp, p)
+        paths.append(p)
+    _pyplot().close(fig)
+    return paths
+
+
+def plot_fig5(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """Fig. 5: the contact law for the dampings of the paper and the contact average."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    styles = {0.0: ("0.4", ":", r"$\eta_c = 0$"), 1.0: ("black", "-", r"$\eta_c = \omega_0$"),
+              0.3: ("tab:blue", "-", r"$\eta_c = 0.3\,\omega_0$"), 0.1: ("tab:red", "-", r"$\eta_c = 0.1\,\omega_0$")}
+    v = ds["v"].values
+    for k in ds["eta_c_factor"].values:
+        color, ls, label = styles.get(float(k), ("gray", "-", f"eta_c = {k:g} omega0"))
+        ax.plot(v, ds["f"].sel(eta_c_factor=k), color=color, ls=ls, label=label)
+    ax.plot(v, ds["f_average"], color="tab:green", ls="--",
+            label=rf"$\langle f(v, v_i^*)\rangle$, N = {ds.attrs['N']}, $\theta$ = {ds.attrs['theta']:g} "
+                  rf"($\eta_c$ = {ds.attrs['eta_c_average'] / ds.attrs['omega0']:g} $\omega_0$)")
+    ax.axvline(ds.attrs["v0"], color="0.8", lw=0.8, zorder=0)
+    ax.set_xscale("log")
+    ax.set_xlabel("v (m/s)")
+    ax.set_ylabel(r"$f(v, v_0) / (\varepsilon f_0)$")
+    ax.set_ylim(0, 2.0)
+    ax.set_xlim(v[0], v[-1])
+    ax.set_title("Fig. 5: contact force law, eq. (1)")
+    ax.legend(fontsize=8, loc="upper left")
+    return _save(fig, out, "fig5")
+
+
+def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """Fig. 6: seed-averaged mu_star versus theta from a sweep Dataset (see module docstring)."""
+    plt = _pyplot()
+    cfg = base_config(ds)
+    avg, sel = fig6_table(ds)
+    v_values = sorted(avg["v_d"].values.tolist())
+    v_d1 = min(v_values, key=lambda v: abs(np.log(v / cfg.v0)))
+    ns = avg["N"].values.tolist() if "N" in avg.dims else [None]
+    n_main = MAIN_N if MAIN_N in ns else ns[0]
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    for ec in sorted(avg["eta_c"].values.tolist(), reverse=True):
+        factor = round(ec / cfg.omega0, 3)
+        color, marker = ETA_STYLE.get(factor, ("tab:gray", "^"))
+        for vd in sorted(v_values, reverse=True):
+            filled = vd == v_d1
+            for n in ns:
+                cur = avg.sel(eta_c=ec, v_d=vd, **({} if n is None else {"N": n})).dropna("theta", subset=["mu"])
+                if cur.sizes["theta"] == 0:
+                    continue
+                big = n is not None and n != n_main
+                label = (rf"$\eta_c$ = {factor:g} $\omega_0$, $v_d$ = {vd:g} m/s" if not big
+                         else rf"N = {n}, $\eta_c$ = {factor:g} $\omega_0$, $v_d$ = {vd:g}")
+                ax.errorbar(cur["theta"], cur["mu"], yerr=cur["err"], color=color, marker="*" if big else marker,
+                            ms=11 if big else 6, mfc=color if filled else "white", mec=color, ls="-" if not big else "none",
+                            lw=0.8, capsize=2, label=label, zorder=3 if big else 2)
+    v_d2 = min(v_values)
+    if v_d2 != v_d1:
+        line = dashed_line(cfg, v_d2)
+        ax.axhline(line, color="0.3", ls="--", lw=1, label=rf"$f(v_{{d2}}, v_0)/(\varepsilon f_0)$ = {line:.3f}")
+    ax.set_xlabel(r"$\theta$ (proportional to the load)")
+    ax.set_ylabel(r"$\mu^* = \langle f_d \rangle / (\varepsilon f_0 \theta)$")
+    ax.set_xlim(0, 1.05)
+    extra = ", ".join(f"{k} = {v:g}" for k, v in sel.items())
+    ax.set_title("Fig. 6: friction versus load" + (f" ({extra})" if extra else ""), fontsize=10)
+    ax.legend(fontsize=6.5, ncol=2, loc="lower left")
+    return _save(fig, out, "fig6")
+
+
+__all__ = ["contact_law_dataset", "plot_fig5", "plot_fig6"]
