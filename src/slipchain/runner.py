@@ -116,7 +116,7 @@ def dask_client(scheduler: str | None = None, n_workers: int | None = None) -> I
             yield client
         return
     with LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1, processes=True,
-                      host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+                      host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR) as cluster:
         with Client(cluster) as client:
             yield client
 

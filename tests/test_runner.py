@@ -1,0 +1,152 @@
+"""Sweeps on a real Dask LocalCluster (loopback): results, resume, failures, killed workers and drivers."""
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+from distributed import Client, LocalCluster
+
+from slipchain import run
+from slipchain.io import read_dataset
+from slipchain.runner import run_sweep
+from slipchain.store import Store
+from slipchain.sweep import make_sweep
+
+# Contacts all above v_d (no stick-slip), steady start: a member completes in well under a second.
+FAST = {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3, "theta": 0.5}
+SLOW_T = 0.06  # t_total of members that take about a second each (for the kill tests)
+
+
+@pytest.fixture(scope="module")
+def client():
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=":0") as cluster, Client(cluster) as c:
+        yield c
+
+
+def _sweep(name="t", **grid):
+    return make_sweep({"name": name, "base": FAST, "grid": grid or {"theta": [0.5, 1.0], "seed": [0, 1]}})
+
+
+def test_sweep_runs_every_member_and_matches_direct_runs(tmp_path, client):
+    sw = _sweep()
+    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
+    assert rep.ok and len(rep.ran) == 4 and not rep.skipped
+    ds = Store.open(tmp_path / "s").dataset()
+    assert (ds["status"] == "completed").all()
+    # A member computed on a Dask worker is bit-identical to the same config run here.
+    m = sw.members[3]
+    direct = run(m.config)
+    assert ds["mu_star"].sel(theta=m.coords["theta"], seed=m.coords["seed"]).item() == direct.attrs["mu_star"]
+    stored = read_dataset(tmp_path / "s" / "members" / f"{m.id}.nc")
+    assert (stored["f_d"].values == direct["f_d"].values).all()
+    assert stored.attrs["config"] == m.config.to_toml() and stored.attrs["slipchain_version"]
+
+
+def test_resume_skips_finished_and_reruns_missing_and_failed(tmp_path, client):
+    sw = make_sweep({"name": "r", "base": FAST, "grid": {"E": [1e7, 1e15], "seed": [0, 1]}})
+    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
+    # E = 1e15 Pa makes the explicit springs unstable at this dt: non-finite state, status diverged
+    assert len(rep.ran) == 4 and len(rep.failed) == 2 and not rep.ok
+    assert all(o.status == "diverged" and "non-finite state at step" in o.message for o in rep.failed)
+    st = Store.open(tmp_path / "s")
+    assert len(st.completed_ids()) == 2 and len(st.failed_ids()) == 2
+    done = sorted(st.completed_ids())
+    (st.path / "members" / f"{done[0]}.nc").unlink()  # a lost member
+    before = (st.path / "members" / f"{done[1]}.nc").stat().st_mtime_ns
+    rep2 = run_sweep(sw, tmp_path / "s", client=client, progress=False)
+    assert [m.id for m in rep2.skipped] == [done[1]]
+    assert sorted(o.member.id for o in rep2.ran) == sorted([done[0], *st.failed_ids()])
+    assert (st.path / "members" / f"{done[1]}.nc").stat().st_mtime_ns == before  # skipped: untouched
+    assert len(st.invocations()) == 2 and st.invocations()[1]["skipped"] == 1
+
+
+def test_worker_killed_mid_task_is_retried(tmp_path, client):
+    sw = make_sweep({"name": "k", "base": {**FAST, "t_total": SLOW_T}, "grid": {"seed": list(range(6))}})
+    pids = client.run(os.getpid)
+    killed = {}
+
+    def killer():
+        t_end = time.time() + 60
+        while time.time() < t_end and not killed:
+            busy = {w: k for w, k in client.processing().items() if k}
+            if busy:
+                time.sleep(0.3)  # well inside a task of about a second
+                addr, keys = next(iter(busy.items()))
+                if addr in pids:
+                    os.kill(pids[addr], signal.SIGKILL)
+                    killed.update(addr=addr, keys=list(keys))
+                    return
+            time.sleep(0.02)
+
+    th = threading.Thread(target=killer)
+    th.start()
+    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
+    th.join()
+    assert killed, "no task was seen running, nothing was killed"
+    assert rep.ok and len(rep.ran) == 6, [(o.status, o.message) for o in rep.failed]
+    assert len(Store.open(tmp_path / "s").completed_ids()) == 6
+    client.wait_for_workers(2, timeout=60)  # the nanny restarted the killed worker
+
+
+def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path):
+    definition = tmp_path / "sweep.toml"
+    definition.write_text(
+        'name = "sigkill"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
+        f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(8)))}]\n")
+    store = tmp_path / "s"
+    cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store), "--workers", "2",
+           "--no-progress"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    members = store / "members"
+    try:
+        t_end = time.time() + 120
+        while time.time() < t_end and len(list(members.glob("*.nc")) if members.exists() else []) < 2:
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)  # the orphaned local-cluster processes
+        except ProcessLookupError:
+            pass
+    assert proc.returncode == -signal.SIGKILL
+    survivors = sorted(p.stem for p in members.glob("*.nc"))
+    assert 2 <= len(survivors) < 8
+    for mid in survivors:  # every member file that exists is complete and readable
+        assert read_dataset(members / f"{mid}.nc").attrs["status"] == "completed"
+    mtimes = {mid: (members / f"{mid}.nc").stat().st_mtime_ns for mid in survivors}
+    # the same command again resumes: finished members skipped, the rest run
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert re.search(rf"skipped \(already in the store\)\s*│\s*{len(survivors)}\s*│", done.stdout), done.stdout
+    log = Store.open(store).invocations()
+    assert log[-1]["skipped"] == len(survivors) and log[-1]["ran"] == 8 - len(survivors)
+    assert len(Store.open(store).completed_ids()) == 8
+    assert {mid: (members / f"{mid}.nc").stat().st_mtime_ns for mid in survivors} == mtimes  # not rewritten
+
+
+def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_path, client):
+    definition = tmp_path / "a.toml"
+    definition.write_text('name = "cli"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\n'
+                          "t_total = 3e-3\n[grid]\ntheta = [0.5, 1.0]\n")
+    addr = client.scheduler.address
+    cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(tmp_path / "s"),
+           "--scheduler", addr, "--no-progress"]
+    first = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert first.returncode == 0, first.stderr
+    assert re.search(r"ran, completed\s*│\s*2\s*│", first.stdout), first.stdout
+    other = tmp_path / "b.toml"
+    other.write_text(definition.read_text().replace("[0.5, 1.0]", "[0.5, 0.9]"))
+    refused = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "s"),
+                              "--scheduler", addr, "--no-progress"], capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2
+    assert "different sweep definition" in refused.stderr and "theta" in refused.stderr
+    assert len(list(Path(tmp_path / "s" / "members").glob("*.nc"))) == 2  # nothing mixed in

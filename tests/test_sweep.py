@@ -1,0 +1,138 @@
+"""Sweep definitions and the store: parsing, validation, identity, refusal of a foreign store."""
+
+import numpy as np
+import pytest
+
+from slipchain import make_config
+from slipchain.runner import error_dataset
+from slipchain.store import Store, open_sweep
+from slipchain.sweep import SweepError, load_preset, load_sweep_definition, make_sweep, member_id
+
+FAST = {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3}
+
+
+def test_product_and_union_of_grids():
+    sw = make_sweep({"base": FAST, "grid": [
+        {"N": [31], "theta": [0.5, 1.0], "seed": [0, 1, 2]},
+        {"N": [61], "theta": [1.0], "seed": [0]},
+    ]})
+    assert sw.dims == ("N", "theta", "seed")
+    assert sw.coords == {"N": [31, 61], "theta": [0.5, 1.0], "seed": [0, 1, 2]}
+    assert len(sw.members) == 2 * 3 + 1
+    m = sw.members[0]
+    assert m.config.N == 31 and m.config.theta == 0.5 and m.config.seed == 0 and m.config.start == "steady"
+    # integers are accepted for float parameters, as in config files
+    assert make_sweep({"grid": {"theta": [1]}}).members[0].config.theta == 1.0
+
+
+def test_member_id_is_a_content_hash():
+    a = make_config(FAST)
+    assert member_id(a) == member_id(make_config(dict(FAST)))
+    assert member_id(a) != member_id(a.with_updates(seed=1))
+    assert member_id(a) != member_id(a.with_updates(t_total=3.0000001e-3))
+    # the same physics reached through base or grid has the same id
+    s1 = make_sweep({"base": {**FAST, "theta": 0.5}, "grid": {"seed": [0]}})
+    s2 = make_sweep({"base": FAST, "grid": {"theta": [0.5], "seed": [0]}})
+    assert s1.members[0].id == s2.members[0].id
+
+
+@pytest.mark.parametrize("data, words", [
+    ({"grid": {"thetaa": [1.0]}}, ["unknown parameter 'thetaa'", "grid 1", "theta"]),
+    ({"grid": {"theta": []}}, ["'theta'", "empty list"]),
+    ({"grid": {"theta": [0.5, 0.5]}}, ["'theta'", "repeated"]),
+    ({"grid": {"theta": [0.5, 1.5]}}, ["grid 1", "theta=1.5", "config key 'theta' has value 1.5", "(0, 1]"]),
+    ({"grid": [{"theta": [1.0]}, {"seed": [1]}]}, ["grid 2", "same parameters"]),
+    ({"base": {"N": -3}, "grid": {"seed": [0]}}, ["[base]", "config key 'N' has value -3"]),
+    ({"base": FAST}, ["no [grid] table"]),
+    ({"grid": {"seed": [0]}, "sweep": {}}, ["unknown top-level key", "sweep"]),
+    ({"grid": {"backend": ["cpu"]}}, ["'backend' cannot be swept"]),
+])
+def test_bad_definitions_are_refused_with_the_key_and_value(data, words):
+    with pytest.raises(SweepError) as e:
+        make_sweep(data)
+    for w in words:
+        assert w in str(e.value)
+
+
+def test_sweep_file_errors_name_the_file(tmp_path):
+    with pytest.raises(SweepError, match="does not exist"):
+        load_sweep_definition(tmp_path / "nope.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[grid]\ntheta = [0.5,\n")
+    with pytest.raises(SweepError, match="bad.toml.*not valid TOML"):
+        load_sweep_definition(bad)
+
+
+def test_presets_define_fig6():
+    quick, paper = load_preset("quick"), load_preset("paper")
+    for sw in (quick, paper):
+        assert {"N", "theta", "eta_c", "v_d", "seed"} <= set(sw.dims)
+        assert set(sw.coords["eta_c"]) == {1e6, 3e5, 1e5} and set(sw.coords["v_d"]) == {1e-3, 3e-4}
+        assert 301 in sw.coords["N"] and 1001 in sw.coords["N"]
+    main = [m for m in paper.members if m.coords["N"] == 301 and m.coords["dt"] == 2e-8 and m.coords["sem_target"] == 0.01]
+    thetas = sorted({m.coords["theta"] for m in main})
+    assert len(thetas) >= 10 and thetas[0] == 0.05 and thetas[-1] == 1.0
+    assert len(paper.coords["seed"]) >= 4
+    assert len({m.coords["theta"] for m in paper.members if m.coords["N"] == 1001}) >= 3
+    with pytest.raises(SweepError, match="preset 'huge' is unknown"):
+        load_preset("huge")
+
+
+def test_definition_round_trips_through_the_store(tmp_path):
+    sw = make_sweep({"name": "rt", "base": FAST, "grid": [{"theta": [0.5, 1.0], "seed": [0]}, {"theta": [0.2], "seed": [3]}]})
+    st = Store.open(tmp_path / "s", sw)
+    again = Store.open(tmp_path / "s")
+    assert again.sweep.digest == sw.digest and again.sweep.dims == sw.dims
+    assert [m.id for m in again.sweep.members] == [m.id for m in sw.members]
+    assert Store.open(tmp_path / "s", sw).path == st.path  # same definition: accepted
+
+
+def test_a_store_of_another_sweep_is_refused(tmp_path):
+    a = make_sweep({"name": "a", "base": FAST, "grid": {"theta": [0.5, 1.0]}})
+    b = make_sweep({"name": "b", "base": FAST, "grid": {"theta": [0.5, 0.8]}})
+    c = make_sweep({"name": "a", "base": {**FAST, "t_total": 4e-3}, "grid": {"theta": [0.5, 1.0]}})
+    Store.open(tmp_path / "s", a)
+    with pytest.raises(SweepError) as e:
+        Store.open(tmp_path / "s", b)
+    assert "different sweep definition" in str(e.value) and "theta: [0.5, 1.0] vs [0.5, 0.8]" in str(e.value)
+    with pytest.raises(SweepError, match="base t_total: 0.003 vs 0.004"):
+        Store.open(tmp_path / "s", c)
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "data.txt").write_text("x")
+    with pytest.raises(SweepError, match="not a slipchain sweep store"):
+        Store.open(other, a)
+    with pytest.raises(SweepError, match="not a slipchain sweep store"):
+        open_sweep(tmp_path / "missing")
+
+
+def test_store_files_and_dataset_statuses(tmp_path):
+    """Writing by hand (no Dask): completed -> members/, failures -> failed/, Dataset statuses."""
+    from slipchain import run
+
+    sw = make_sweep({"base": FAST, "grid": [{"theta": [0.5, 1.0], "seed": [0, 1]}, {"theta": [0.2], "seed": [0]}]})
+    st = Store.open(tmp_path / "s", sw)
+    m_ok, m_err = sw.members[0], sw.members[1]
+    ds = run(m_ok.config)
+    assert ds.attrs["status"] == "completed"
+    st.write_member(m_ok, ds)
+    st.write_member(m_err, error_dataset(m_err, RuntimeError("boom")))
+    assert st.completed_ids() == {m_ok.id} and st.failed_ids() == {m_err.id}
+    assert [m.id for m in st.pending()] == [m.id for m in sw.members[1:]]
+    out = st.dataset()
+    assert dict(out.sizes) == {"theta": 3, "seed": 2}
+    status = {(float(t), int(s)): str(out["status"].sel(theta=t, seed=s).item()) for t in (0.2, 0.5, 1.0) for s in (0, 1)}
+    assert status == {(0.5, 0): "completed", (0.5, 1): "error", (1.0, 0): "missing", (1.0, 1): "missing",
+                      (0.2, 0): "missing", (0.2, 1): "absent"}
+    assert out["mu_star"].sel(theta=0.5, seed=0).item() == ds.attrs["mu_star"]
+    assert np.isnan(out["mu_star"].sel(theta=0.5, seed=1).item())
+    assert "RuntimeError: boom" in out["message"].sel(theta=0.5, seed=1).item()
+    # the stored member is the whole run, with its point and the sweep it belongs to
+    back = st.read_member(m_ok)
+    assert back.attrs["sweep_theta"] == 0.5 and back.attrs["sweep_digest"] == sw.digest
+    np.testing.assert_array_equal(back["f_d"].values, ds["f_d"].values)
+    # a later success replaces the failure
+    st.write_member(m_err, run(m_err.config))
+    assert st.failed_ids() == set() and st.completed_ids() == {m_ok.id, m_err.id}
+    index = (st.write_index()).read_text().splitlines()
+    assert len(index) == 1 + len(sw.members) and index[0].startswith("member_id,theta,seed,status")
