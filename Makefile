@@ -15,8 +15,10 @@ $(STAMP): pyproject.toml
 	rm -f $(VENV)/.installed-*
 	touch $@
 
+PRESET ?= quick
+
 run: $(STAMP)
-	$(BIN)/slipchain run --out results/default.nc
+	$(BIN)/slipchain reproduce --preset $(PRESET)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q

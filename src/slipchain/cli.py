@@ -177,6 +177,81 @@ def figure_fig6(
         Console().print(f"wrote {p}")
 
 
+@figure_app.command("tester")
+def figure_tester(
+    runs: Annotated[Path, typer.Option("--runs", help="Output directory of `slipchain tester analyze` (its runs.csv).")],
+    store: Annotated[Optional[Path], typer.Option("--store", help="Sweep store with a v_d dimension (model curves).")] = None,
+    out: Annotated[Optional[Path], typer.Option("--out", help="Output directory (default: the --runs directory).")] = None,
+) -> None:
+    """Measured mu(v) with the model's mu_star(v_d) curves, one fitted scale factor per surface."""
+    import pandas as pd
+
+    from .store import Store
+    from .tester.plots import plot_model_vs_experiment
+
+    table_path = runs / "runs.csv"
+    if not table_path.exists():
+        _fail(f"{table_path} does not exist; run `slipchain tester analyze ... --out {runs}` first")
+    sweep_ds = None
+    if store is not None:
+        try:
+            sweep_ds = Store.open(store).dataset()
+        except SweepError as e:
+            _fail(str(e))
+        if "v_d" not in sweep_ds.dims:
+            _fail(f"store {str(store)!r} sweeps {list(sweep_ds.dims)}; model curves need a v_d dimension")
+    for p in plot_model_vs_experiment(pd.read_csv(table_path), sweep_ds, out or runs):
+        Console().print(f"wrote {p}")
+
+
+tester_app = typer.Typer(no_args_is_help=True, help="The paper's friction-tester experiment: analysis and synthetic data.")
+app.add_typer(tester_app, name="tester")
+
+
+@tester_app.command("analyze")
+def tester_analyze(
+    runs_csv: Annotated[Path, typer.Argument(help="Runs table (CSV).")],
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    traces: Annotated[Optional[Path], typer.Option("--traces", help="Raw distance traces (CSV, long format).")] = None,
+) -> None:
+    """Steady velocity per trace, mu and p0 with uncertainties, maxima per pressure, the load test."""
+    from .tester import TesterDataError, analyze
+
+    try:
+        result = analyze(runs_csv, traces, out)
+    except TesterDataError as e:
+        _fail(str(e))
+    counts = result.runs["status"].value_counts().to_dict()
+    table = Table(title=f"slipchain tester analyze: {out}")
+    table.add_column("status")
+    table.add_column("runs", justify="right")
+    for k, v in sorted(counts.items()):
+        table.add_row(k, str(v))
+    Console().print(table)
+    for t in result.tests:
+        holds = t.claim_holds
+        Console().print(f"{', '.join(map(str, t.group))}: load claim "
+                        f"{'not testable' if holds is None else 'supported' if holds else 'not supported'}")
+    Console().print(f"wrote {', '.join(str(p) for p in result.files.values())}")
+
+
+@tester_app.command("synth")
+def tester_synth(
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+    seed: Annotated[int, typer.Option("--seed", help="Random seed (noise, run-to-run scatter).")] = 0,
+    load_effect: Annotated[float, typer.Option("--load-effect", help="Planted s: fractional fall of mu near its maximum per p_ref of pressure (0: none).")] = 0.15,
+) -> None:
+    """SYNTHETIC demo data: a simulated dead-weight tester (runs.csv, traces.csv, truth.csv, README.txt)."""
+    from dataclasses import replace
+
+    from .tester.synth import NOTICE, SynthSetup, write_synthetic
+
+    setup = SynthSetup(seed=seed)
+    paths = write_synthetic(out, replace(setup, law=replace(setup.law, s=load_effect)))
+    err.print(NOTICE, markup=False, highlight=False, soft_wrap=True)
+    Console().print(f"wrote {', '.join(str(p) for p in paths.values())}")
+
+
 @app.command()
 def reproduce(
     preset: Annotated[str, typer.Option("--preset", help=f"One of {', '.join(PRESETS)}.")] = "quick",

@@ -1,0 +1,56 @@
+"""The paper's friction-tester experiment (Figs. 1 to 3): from raw distance traces to mu(v) per pressure.
+
+``analyze(runs_csv, traces_csv, out)``: read and check the inputs (:mod:`.io`), steady velocity
+per trace (:mod:`.velocity`), mu and p0 with uncertainties, first maxima and the load test
+(:mod:`.analysis`), figures (:mod:`.plots`); writes ``runs.csv``, ``maxima.csv``, ``summary.md``
+and the figures. ``synth``: a simulated dead-weight tester for examples and tests (:mod:`.synth`).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from .analysis import LoadTest, analyze_runs, load_tests, maxima, summary_markdown
+from .io import TesterDataError, read_runs, read_traces
+from .plots import plot_mu_v
+
+
+@dataclass
+class Analysis:
+    runs: pd.DataFrame
+    maxima: pd.DataFrame
+    tests: list[LoadTest]
+    files: dict[str, Path]
+
+
+def _write_csv(df: pd.DataFrame, path: Path) -> Path:
+    tmp = path.with_name(f".{path.name}.tmp")
+    df.to_csv(tmp, index=False)
+    os.replace(tmp, path)
+    return path
+
+
+def analyze(runs_csv: str | os.PathLike, traces_csv: str | os.PathLike | None, out: str | os.PathLike) -> Analysis:
+    """The whole analysis; raises TesterDataError only for input that cannot be read at all."""
+    runs = read_runs(runs_csv)
+    orphans = read_traces(traces_csv, runs) if traces_csv is not None else []
+    table = analyze_runs(runs + orphans)
+    peaks = maxima(table)
+    tests = load_tests(table, peaks)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    figures = plot_mu_v(table, peaks, out)
+    files = {"runs": _write_csv(table, out / "runs.csv"), "maxima": _write_csv(peaks, out / "maxima.csv")}
+    text = summary_markdown(table, peaks, tests, [p.name for p in figures if p.suffix == ".png"])
+    files["summary"] = out / "summary.md"
+    files["summary"].write_text(text)
+    for p in figures:
+        files[p.name] = p
+    return Analysis(table, peaks, tests, files)
+
+
+__all__ = ["Analysis", "TesterDataError", "analyze"]
