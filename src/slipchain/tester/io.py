@@ -39,6 +39,8 @@ MIN_TRACE_POINTS = 20
 class TesterDataError(ValueError):
     """Input that cannot be analysed at all; the message names file, line and column."""
 
+    __test__ = False  # not a pytest test class despite its name
+
 
 @dataclass
 class Run:

@@ -17,8 +17,8 @@ below it, by less than 4 % of that. ``s = 0`` plants no load effect. Each run's 
 little: its law is multiplied by ``1 + run_scatter*N(0, 1)`` (the run-to-run scatter of real
 testers), and its truth is computed with that factor.
 
-The hanging masses are chosen so that the steady velocities span ``v_min`` to just below the
-maximum (solving mu(v, p0) = M'/M on the rising branch), plus runs above the maximum
+The hanging masses are chosen so that the steady velocities span ``v_min`` to 0.1 v_max and,
+more densely, 0.2 to 0.8 v_max (solving mu(v, p0) = M'/M on the rising branch), plus runs above the maximum
 (``runaway_factors`` times mu_max), which accelerate until the slider reaches the end of the track.
 Each trace has ``points`` samples with Gaussian sensor noise ``noise_m``; the record lasts until
 the slider has moved ``record_distance_m`` (at least ``min_duration_s``, at most ``max_duration_s``)
@@ -87,7 +87,8 @@ class SynthSetup:
     area_m2: float = 4e-3
     slider_masses_kg: tuple[float, ...] = (5.0, 10.0, 20.0)
     v_min: float = 1e-6
-    velocities_per_pressure: int = 9
+    low_velocities: int = 6  # steady runs from v_min to 0.1 v_max (log-spaced)...
+    near_velocities: int = 5  # ...and from 0.2 v_max to 0.8 v_max, where the load effect is
     runaway_factors: tuple[float, ...] = (1.1, 1.3)
     run_scatter: float = 0.02
     mass_uncertainty_kg: float = 1e-3
@@ -123,7 +124,8 @@ def synthesize(setup: SynthSetup = SynthSetup()) -> tuple[pd.DataFrame, pd.DataF
     for M in setup.slider_masses_kg:
         p0 = M * G / setup.area_m2
         v_max, mu_max = law.maximum(p0)
-        targets = np.geomspace(setup.v_min, 0.7 * v_max, setup.velocities_per_pressure)
+        targets = np.concatenate([np.geomspace(setup.v_min, 0.1 * v_max, setup.low_velocities),
+                                  np.geomspace(0.2 * v_max, 0.8 * v_max, setup.near_velocities)])
         mus = [float(law.mu(v, p0)) for v in targets] + [f * mu_max for f in setup.runaway_factors]
         for mu_target in mus:
             k += 1

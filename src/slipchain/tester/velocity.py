@@ -16,8 +16,10 @@ Algorithm (all choices are constants below):
    of a straight-line fit, and its standard error from the residuals, inflated by
    ``sqrt((1+rho)/(1-rho))`` for a positive lag-1 autocorrelation ``rho`` of the residuals
    (correlated noise, e.g. unresolved stick-slip, carries less information than white noise),
-   combined in quadrature with ``|dv|/sqrt(12)``, the spread of a velocity that drifts by ``dv``
-   across the window (what is left of the start-up transient).
+   combined in quadrature, when the window's velocity change ``dv`` is significant, with
+   ``|dv|/sqrt(12)``, the spread of a velocity that drifts by ``dv`` across the window (what is
+   left of the start-up transient).
+   A window counts only if the slider moves: ``b > 3 SE(b)``.
 4. No steady window: ``runaway`` if the last window accelerates significantly (c > 0); else
    ``no-steady`` (decelerating or irregular). A slider that does not move is ``no-steady`` too.
 """
@@ -79,21 +81,24 @@ def steady_velocity(t: np.ndarray, x: np.ndarray) -> VelocityFit:
         coef, cov, _ = _poly_fit(tt - mid, xx, 2)
         b, c = coef[1], coef[2]
         dv, se_dv = 2 * c * W, 2 * W * np.sqrt(cov[2, 2])
-        last = (b, dv, se_dv, W)
-        if b > 0 and (abs(dv) <= REL_TOL * b or abs(dv) <= SIGMAS * se_dv):
+        moving = b > SIGMAS * np.sqrt(cov[1, 1])
+        last = (moving, b, dv, se_dv, W)
+        if moving and (abs(dv) <= REL_TOL * b or abs(dv) <= SIGMAS * se_dv):
             lin, lcov, resid = _poly_fit(tt - mid, xx, 1)
             rho = _lag1(resid)
             inflate = np.sqrt((1 + rho) / (1 - rho)) if 0 < rho < 1 else 1.0
-            sem = float(np.hypot(np.sqrt(lcov[1, 1]) * inflate, dv / np.sqrt(12.0)))
+            drift = dv / np.sqrt(12.0) if abs(dv) > SIGMAS * se_dv else 0.0  # a real (significant) drift
+            sem = float(np.hypot(np.sqrt(lcov[1, 1]) * inflate, drift))
             return VelocityFit(OK, float(lin[1]), sem, float(t_k), int(tt.size),
                                f"steady from t = {t_k:.4g} s ({tt.size} points); velocity change over the window "
                                f"{dv / b:+.1%}")
     if last is None:
         return VelocityFit(NO_STEADY, float("nan"), float("nan"), float("nan"), 0, "too few points for a window")
-    b, dv, se_dv, W = last
-    if b <= 0:
+    moving, b, dv, se_dv, W = last
+    if not moving:
         return VelocityFit(NO_STEADY, float("nan"), float("nan"), float("nan"), 0,
-                           f"the slider does not move forward in the last {W:.3g} s (mean velocity {b:.3g} m/s)")
+                           f"the slider does not move forward in the last {W:.3g} s (velocity {b:.3g} m/s, not "
+                           f"significantly above 0)")
     if dv > 0:
         return VelocityFit(RUNAWAY, float("nan"), float("nan"), float("nan"), 0,
                            f"runaway: the velocity still rises by {dv / b:+.0%} ({dv / se_dv:.1f} SE) over the last "
