@@ -9,7 +9,8 @@ Groups are (surface, compound, temperature); pressures within a group are groupe
 significant digits. For each pressure the **first maximum** of mu(v): the set-up only measures
 the rising branch (above the maximum the slider runs away), so ``mu_max`` is the largest mu that
 still slid steadily and ``v_max`` its velocity; the smallest mu of a runaway run at that pressure
-bounds the true maximum from above (``mu_runaway_min``).
+bounds the true maximum from above (``mu_runaway_min``), up to the run-to-run scatter of the
+surface (which can put it below ``mu_max``).
 
 **The load test** (paper: near the maximum mu falls with p0, well below it it does not). For
 each group, with ``xi = log10(v/v_ref)`` and ``v_ref`` the median of the pressures' ``v_max``,

@@ -113,7 +113,7 @@ def plot_model_vs_experiment(table: pd.DataFrame, sweep: xr.Dataset | None, out:
             s = fit_scale(g["velocity_m_s"].to_numpy(), g["mu"].to_numpy(), (mean_curve[0][good], mean_curve[1][good]))
             styles = ["-", "--", "-.", ":"]
             for i, (label, (cv, cm)) in enumerate(curves.items()):
-                ax.plot(cv, s * cm, color="tab:red", ls=styles[i % 4], lw=1.5, label=f"model {label} (x {s:.3g})")
+                ax.plot(cv, s * cm, color="tab:red", ls=styles[i % 4], lw=1.5, label=f"model mu_star{'' if label == 'model' else ', ' + label} (x {s:.3g})")
         ax.set_xscale("log")
         ax.set_xlabel("v (m/s)")
         ax.set_ylabel(r"$\mu$ (model: scale $\times\ \mu^*$)")
