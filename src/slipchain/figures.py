@@ -106,10 +106,14 @@ def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     v_d1 = min(v_values, key=lambda v: abs(np.log(v / cfg.v0)))
     ns = avg["N"].values.tolist() if "N" in avg.dims else [None]
     n_main = MAIN_N if MAIN_N in ns else ns[0]
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    fig, ax = plt.subplots(figsize=(8.2, 4.8))
+    handles = []
+    from matplotlib.lines import Line2D
+
     for ec in sorted(avg["eta_c"].values.tolist(), reverse=True):
         factor = round(ec / cfg.omega0, 3)
         color, marker = ETA_STYLE.get(factor, ("tab:gray", "^"))
+        handles.append(Line2D([], [], color=color, marker=marker, label=rf"$\eta_c$ = {factor:g} $\omega_0$"))
         for vd in sorted(v_values, reverse=True):
             filled = vd == v_d1
             for n in ns:
@@ -117,21 +121,28 @@ def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
                 if cur.sizes["theta"] == 0:
                     continue
                 big = n is not None and n != n_main
-                label = (rf"$\eta_c$ = {factor:g} $\omega_0$, $v_d$ = {vd:g} m/s" if not big
-                         else rf"N = {n}, $\eta_c$ = {factor:g} $\omega_0$, $v_d$ = {vd:g}")
                 ax.errorbar(cur["theta"], cur["mu"], yerr=cur["err"], color=color, marker="*" if big else marker,
                             ms=11 if big else 6, mfc=color if filled else "white", mec=color, ls="-" if not big else "none",
-                            lw=0.8, capsize=2, label=label, zorder=3 if big else 2)
+                            lw=0.8, capsize=2, zorder=3 if big else 2)
+    handles.append(Line2D([], [], color="0.3", marker="o", ls="none", label=f"filled: $v_{{d1}}$ = {v_d1:g} m/s"))
     v_d2 = min(v_values)
     if v_d2 != v_d1:
+        handles.append(Line2D([], [], color="0.3", marker="o", mfc="white", ls="none",
+                              label=f"open: $v_{{d2}}$ = {v_d2:g} m/s"))
+    if len(ns) > 1:
+        handles.append(Line2D([], [], color="0.3", marker="*", ms=11, ls="none",
+                              label="stars: N = " + ", ".join(str(n) for n in ns if n != n_main)))
+    if v_d2 != v_d1:
         line = dashed_line(cfg, v_d2)
-        ax.axhline(line, color="0.3", ls="--", lw=1, label=rf"$f(v_{{d2}}, v_0)/(\varepsilon f_0)$ = {line:.3f}")
+        ax.axhline(line, color="0.3", ls="--", lw=1)
+        handles.append(Line2D([], [], color="0.3", ls="--", label=rf"$f(v_{{d2}}, v_0)/(\varepsilon f_0)$ = {line:.3f}"))
     ax.set_xlabel(r"$\theta$ (proportional to the load)")
     ax.set_ylabel(r"$\mu^* = \langle f_d \rangle / (\varepsilon f_0 \theta)$")
     ax.set_xlim(0, 1.05)
     extra = ", ".join(f"{k} = {v:g}" for k, v in sel.items())
-    ax.set_title("Fig. 6: friction versus load" + (f" ({extra})" if extra else ""), fontsize=10)
-    ax.legend(fontsize=6.5, ncol=2, loc="lower left")
+    n_text = f"N = {n_main}" if n_main is not None else ""
+    ax.set_title("Fig. 6: friction versus load" + (f" ({', '.join(x for x in (n_text, extra) if x)})"), fontsize=10)
+    ax.legend(handles=handles, fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
     return _save(fig, out, "fig6")
 
 

@@ -55,6 +55,8 @@ def write_outputs(st: Store, out: Path, *, command: str) -> tuple[Path, list[Pat
     ds = st.dataset()
     wall, n_inv = sweep_wall_time(st)
     ds.attrs["invocations"] = n_inv
+    ds.attrs["workers"] = ", ".join(sorted({str(r.get("n_workers") or r.get("scheduler"))
+                                            for r in st.invocations() if r.get("ran")}))
     figures = plot_fig5(contact_law_dataset(base_config(ds)), out) + plot_fig6(ds, out)
     text = report_markdown(ds, evaluate(ds), convergence(ds), command=command, wall_time_s=wall or None,
                            figures=[p.name for p in figures if p.suffix == ".png"])

@@ -45,7 +45,7 @@ def main_selection(ds: xr.Dataset) -> dict[str, Any]:
         if d in FIG6_DIMS:
             continue
         counts = done.sum([x for x in ds.dims if x != d])
-        sel[d] = ds[d].values[int(counts.argmax())].item()
+        sel[d] = ds[d].values[int(np.argmax(counts.values))].item()
     return sel
 
 
@@ -156,7 +156,9 @@ def evaluate(ds: xr.Dataset) -> list[Claim]:
         claims.append(Claim(
             paper=f"At v_d1 = v0 = {v_d1:g} m/s mu_star falls by more than 20 % as theta (load) grows; "
                   "the smaller eta_c, the stronger the fall.",
-            measured=text + (". Drops ordered by eta_c: yes." if ordered else ". Drops ordered by eta_c: NO."),
+            measured=text + (". Drops ordered by eta_c: yes." if ordered else ". Drops ordered by eta_c: NO.")
+            + f" At eta_c = {_eta(smallest['eta_c'])} the ratio is {(DROP_RATIO_MAX - smallest['ratio']) / smallest['ratio_err']:+.1f} "
+              f"of its error below {DROP_RATIO_MAX}.",
             criterion=f"mu_star(theta_max)/mu_star(theta_min) <= {DROP_RATIO_MAX} at eta_c = {_eta(smallest['eta_c'])}, "
                       "and the drop larger for smaller eta_c",
             passed=smallest["ratio"] <= DROP_RATIO_MAX and ordered,
@@ -238,8 +240,9 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
         f"- Command: `{command}`",
         f"- Sweep `{ds.attrs.get('sweep_name')}` (digest {ds.attrs.get('sweep_digest')}): {n_done} of {n_total} members "
         f"completed; the sum of the members' run times is {members_wall / 60:.1f} CPU-minutes"
-        + (f"; wall time of the sweep {wall_time_s / 60:.1f} min ({ds.attrs.get('invocations', 1)} invocation(s) that ran "
-           "members, from the store's invocations.jsonl)." if wall_time_s is not None else "."),
+        + (f"; wall time of the sweep {wall_time_s / 60:.1f} min with {ds.attrs.get('workers', '?')} local worker "
+           f"process(es) ({ds.attrs.get('invocations', 1)} invocation(s) that ran members, from the store's "
+           "invocations.jsonl)." if wall_time_s is not None else "."),
         f"- Base: epsilon = {cfg.epsilon:g}, dt = {cfg.dt:g} s, start = {cfg.start}, automatic run length until "
         f"SE(mu_star) <= {cfg.sem_target:g} (at most t_max = {cfg.t_max:g} s), slipchain {_versions(ds)}.",
         "- Error bars: seed mean of mu_star, error sqrt(max(var_seeds/n, mean(SE_time^2)/n)).",
