@@ -204,6 +204,77 @@ def figure_tester(
         Console().print(f"wrote {p}")
 
 
+@figure_app.command("mechanism")
+def figure_mechanism(
+    store: Annotated[Path, typer.Option("--store", help="Store of a Fig. 6-like sweep, analysed by `slipchain mechanism`.")],
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+) -> None:
+    """Stick-slip fraction versus theta, per-contact forces, event sizes and spectra; mechanism.md with the numbers."""
+    from .figures import plot_mechanism
+    from .mechanism import load_mechanism, mechanism_summary, stick_slip_dataset
+    from .store import Store
+
+    try:
+        st = Store.open(store)
+        analyses = load_mechanism(st)
+    except (SweepError, FileNotFoundError) as e:
+        _fail(str(e))
+    ss = stick_slip_dataset(st)
+    paths = plot_mechanism(ss, analyses, out)
+    report = out / "mechanism.md"
+    report.write_text(mechanism_summary(ss, analyses) + "\n" + "\n".join(f"![{p.name}]({p.name})" for p in paths
+                                                                         if p.suffix == ".png") + "\n")
+    for p in [*paths, report]:
+        Console().print(f"wrote {p}")
+
+
+@figure_app.command("velocity")
+def figure_velocity(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over v_d (e.g. presets/velocity.toml).")],
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+) -> None:
+    """mu_star versus v_d on a log axis, one curve per theta (the model's Figs. 2 and 3)."""
+    from .figures import plot_velocity
+    from .store import Store
+
+    try:
+        ds = Store.open(store).dataset()
+    except SweepError as e:
+        _fail(str(e))
+    if "v_d" not in ds.dims:
+        _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; the velocity figure needs v_d")
+    for p in plot_velocity(ds, out):
+        Console().print(f"wrote {p}")
+
+
+@app.command()
+def mechanism(
+    store: Annotated[Path, typer.Option("--store", help="Store of a completed Fig. 6-like sweep.")],
+    duration: Annotated[float, typer.Option("--duration", min=1e-6, help="Field recording length, s.")] = 1e-2,
+    interval: Annotated[float, typer.Option("--interval", min=1e-9, help="Sampling interval of u_i(t), s.")] = 1e-6,
+    force: Annotated[bool, typer.Option("--force", help="Redo analyses already in the store.")] = False,
+) -> None:
+    """Field recordings, slip events and spectra of the lowest and highest theta at each v_d (into STORE/mechanism/)."""
+    from .mechanism import MECHANISM, analyse_member, mechanism_members
+    from .store import Store
+
+    try:
+        st = Store.open(store)
+        members = mechanism_members(st)
+    except SweepError as e:
+        _fail(str(e))
+    for m in members:
+        path = st.path / MECHANISM / f"{m.id}.nc"
+        if path.exists() and not force:
+            Console().print(f"kept {path} ({m.label()})")
+            continue
+        try:
+            analyse_member(st, m, duration=duration, interval=interval)
+        except (ValueError, FloatingPointError) as e:
+            _fail(f"{m.label()}: {e}")
+        Console().print(f"wrote {path} ({m.label()})")
+
+
 tester_app = typer.Typer(no_args_is_help=True, help="The paper's friction-tester experiment: analysis and synthetic data.")
 app.add_typer(tester_app, name="tester")
 

@@ -147,3 +147,139 @@ def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
 
 
 __all__ = ["contact_law_dataset", "plot_fig5", "plot_fig6"]
+
+
+# --- the mechanism (issue 5) ----------------------------------------------------------------------
+def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str | os.PathLike) -> list[Path]:
+    """Stick-slip fraction versus theta, per-contact forces, event sizes and spectra (low and high theta).
+
+    ``stick_slip``: :func:`slipchain.mechanism.stick_slip_dataset` of a Fig. 6-like store;
+    ``analyses``: the stored analyses of :func:`slipchain.mechanism.mechanism_members`.
+    """
+    from .reproduction import seed_average
+
+    plt = _pyplot()
+    paths: list[Path] = []
+    cfg = base_config(stick_slip)
+    sel = {k: v for k, v in _extra_selection(stick_slip).items()}
+    avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
+    if "N" in avg.dims:
+        avg = avg.sel(N=MAIN_N if MAIN_N in avg["N"].values else avg["N"].values[0])
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    v_values = sorted(avg["v_d"].values.tolist(), reverse=True)
+    for ec in sorted(avg["eta_c"].values.tolist(), reverse=True) if "eta_c" in avg.dims else [None]:
+        factor = round(ec / cfg.omega0, 3) if ec is not None else cfg.eta_c / cfg.omega0
+        color, marker = ETA_STYLE.get(factor, ("tab:gray", "^"))
+        for vd in v_values:
+            cur = avg.sel(v_d=vd, **({} if ec is None else {"eta_c": ec})).dropna("theta", subset=["mu"])
+            filled = vd == max(v_values)
+            ax.errorbar(cur["theta"], cur["mu"], yerr=cur["err"], color=color, marker=marker,
+                        mfc=color if filled else "white", lw=0.8, capsize=2,
+                        label=rf"$\eta_c$ = {factor:g} $\omega_0$, $v_d$ = {vd:g} m/s")
+    ax.set_xlabel(r"$\theta$")
+    ax.set_ylabel("fraction of contacts that stick-slip")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_title("Stick-slip fraction versus load (slow fraction >= 5 % of the steady time)", fontsize=9)
+    ax.legend(fontsize=7, loc="center right")
+    paths += _save(fig, out, "mechanism_stick_slip")
+
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    styles = {}
+    for a in analyses:
+        key = (a.attrs["v_d"], a.attrs["theta"])
+        styles[key] = ("-" if a.attrs["theta"] >= 0.5 else "--", "tab:red" if key[0] == max(k[0] for k in
+                        [(b.attrs["v_d"], 0) for b in analyses]) else "tab:blue")
+    for a in analyses:
+        ls, color = styles[(a.attrs["v_d"], a.attrs["theta"])]
+        label = rf"$v_d$ = {a.attrs['v_d']:g}, $\theta$ = {a.attrs['theta']:.2g}"
+        # per-contact mean force against v*, and the isolated-contact value f(v_d, v*)
+        amp = a.attrs["amplitude"]
+        order = np.argsort(a["vstar"].values)
+        axes[0].plot(a["vstar"].values, a["force_mean"].values / amp, ls="none",
+                     marker="o" if a.attrs["theta"] >= 0.5 else "x", ms=3, color=color, alpha=0.6, label=label)
+        axes[0].plot(a["vstar"].values[order], a["force_single"].values[order] / amp, color=color, lw=0.8, ls=":")
+        # event sizes
+        if a.sizes.get("event", 0):
+            sizes = a["event_size"].values[~a["event_truncated"].values.astype(bool)]
+            if sizes.size:
+                bins = np.unique(np.round(np.geomspace(1, max(sizes.max(), 2) + 1, 20)))
+                h, e = np.histogram(sizes, bins=bins)
+                centers = np.sqrt(e[:-1] * e[1:])
+                density = h / np.diff(e) / a.attrs["duration"]
+                ok = h > 0
+                axes[1].plot(centers[ok], density[ok], marker="o", ls=ls, color=color,
+                             label=f"{label}: {sizes.size} events")
+        f = a["frequency"].values[1:]
+        axes[2].plot(f, a["psd_u"].values[1:], color=color, ls=ls, lw=1, label=label)
+    axes[0].set_xscale("log")
+    from matplotlib.ticker import NullFormatter
+
+    axes[0].xaxis.set_minor_formatter(NullFormatter())
+    axes[0].set_xlabel(r"$v^*_i$ (m/s)")
+    axes[0].set_ylabel(r"time-averaged contact force / $(\varepsilon f_0)$")
+    axes[0].set_title(r"per contact (dotted: isolated contact, $f(v_d, v^*_i)$)", fontsize=9)
+    axes[0].legend(fontsize=7)
+    axes[1].set_xscale("log")
+    axes[1].set_yscale("log")
+    axes[1].set_xlabel("event size (blocks)")
+    axes[1].set_ylabel("events per bin width per second")
+    axes[1].set_title("slip events (u > 2 v_d, connected in space and time)", fontsize=9)
+    axes[1].legend(fontsize=7)
+    axes[2].set_xscale("log")
+    axes[2].set_yscale("log")
+    axes[2].set_xlabel("frequency (Hz)")
+    axes[2].set_ylabel(r"PSD of $u_i$ ((m/s)$^2$/Hz), mean over blocks")
+    axes[2].set_title("interface velocity spectra (Welch, Hann)", fontsize=9)
+    axes[2].legend(fontsize=7)
+    paths += _save(fig, out, "mechanism_contacts_events_spectra")
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for a in analyses:
+        ls, color = styles[(a.attrs["v_d"], a.attrs["theta"])]
+        label = rf"$v_d$ = {a.attrs['v_d']:g}, $\theta$ = {a.attrs['theta']:.2g}"
+        f = a["frequency"].values[1:]
+        axes[0].plot(f, a["psd_f_d"].values[1:], color=color, ls=ls, lw=1, label=label)
+        axes[1].plot(f, a["psd_acoustic"].values[1:], color=color, ls=ls, lw=1, label=label)
+    for ax, what in zip(axes, (r"$f_d(t)$ (N$^2$/Hz)", r"acoustic proxy $\sum_i f(u_i, v^*_i)$ (N$^2$/Hz)")):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("PSD of " + what)
+        ax.legend(fontsize=7)
+    paths += _save(fig, out, "mechanism_force_spectra")
+    return paths
+
+
+def _extra_selection(ds: xr.Dataset) -> dict:
+    from .reproduction import main_selection
+
+    return main_selection(ds)
+
+
+def plot_velocity(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """mu_star versus v_d (log axis), one curve per theta: the model's Figs. 2 and 3."""
+    from .reproduction import main_selection, seed_average
+
+    plt = _pyplot()
+    sel = main_selection(ds)
+    avg = seed_average(ds.sel(sel) if sel else ds)
+    cfg = base_config(ds)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    other = [d for d in avg["mu"].dims if d not in ("v_d", "theta")]
+    sub = avg.isel({d: 0 for d in other}) if other else avg
+    thetas = sub["theta"].values.tolist() if "theta" in sub.dims else [None]
+    colors = plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))
+    for th, color in zip(thetas, colors):
+        cur = (sub.sel(theta=th) if th is not None else sub).dropna("v_d", subset=["mu"])
+        ax.errorbar(cur["v_d"], cur["mu"], yerr=cur["err"], color=color, marker="o", capsize=2,
+                    label=rf"$\theta$ = {th:g}" if th is not None else "model")
+    v = np.geomspace(float(avg["v_d"].min()), float(avg["v_d"].max()), 200)
+    ax.plot(v, cfg.contact_law.force(v, cfg.v0) / (cfg.epsilon * cfg.f0), color="0.5", ls=":",
+            label=r"$f(v, v_0)/(\varepsilon f_0)$")
+    ax.set_xscale("log")
+    ax.set_xlabel(r"$v_d$ (m/s)")
+    ax.set_ylabel(r"$\mu^*$")
+    ax.set_title(r"$\mu^*(v_d)$ at several loads" + (f" ({', '.join(f'{d} = {sub[d].item():g}' for d in other)})"
+                                                      if other else ""), fontsize=10)
+    ax.legend(fontsize=8)
+    return _save(fig, out, "velocity")

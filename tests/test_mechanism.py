@@ -1,0 +1,129 @@
+"""Stick-slip classifier, slip events, spectra and field recordings."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from slipchain import make_config, run, simulate
+from slipchain.mechanism import (classify_series, median_frequency, record_field, slip_events, spectra,
+                                 state_from_run, stick_slip_fraction)
+from slipchain.store import Store
+from slipchain.sweep import make_sweep
+from slipchain.system import build_system
+
+V_D = 1e-3
+
+
+def test_classifier_on_constructed_signals():
+    t = np.linspace(0, 1, 10_000, endpoint=False)
+    steady = V_D * (1 + 0.05 * np.sin(2 * np.pi * 7 * t))
+    ss, slow, cv = classify_series(steady, V_D)
+    assert not ss and slow == 0.0 and cv == pytest.approx(0.05 / np.sqrt(2), rel=1e-3)
+    # periodic stick-slip: stuck 80 % of each period, slipping at 5 v_d for 20 %: mean v_d
+    phase = (t * 20) % 1
+    stick_slip = np.where(phase < 0.8, 0.0, 5 * V_D)
+    ss, slow, cv = classify_series(stick_slip, V_D)
+    assert ss and slow == pytest.approx(0.8, abs=1e-3) and cv == pytest.approx(2.0, rel=1e-3)
+    # creeping slowly half the time (|u| < 0.1 v_d) counts as stuck
+    assert classify_series(np.where(phase < 0.5, 0.05 * V_D, 1.95 * V_D), V_D)[0]
+
+
+def test_stick_slip_fraction_and_its_error():
+    ds = xr.Dataset({"contact_slow_fraction": ("contact", np.array([0.0, 0.01, 0.3, 0.9, 0.049, 0.05]))})
+    p, se = stick_slip_fraction(ds)
+    assert p == pytest.approx(3 / 6) and se == pytest.approx(np.sqrt(0.25 / 6))
+
+
+def _field(u, interval=1e-6, v_d=V_D, K_T=66.7):
+    n, nb = u.shape
+    return xr.Dataset({"u": (("time", "block"), u.astype(np.float32)), "f_d_instant": ("time", np.zeros(n)),
+                       "acoustic": ("time", np.zeros(n))},
+                      coords={"time": (np.arange(n) + 1) * interval, "block": np.arange(nb)},
+                      attrs={"interval": interval, "v_d": v_d, "K_T": K_T})
+
+
+def test_slip_events_on_a_known_space_time_pattern():
+    u = np.full((100, 20), 0.5 * V_D)  # background creep below the threshold
+    u[10:15, 3:8] = 5 * V_D            # event A: 5 blocks x 5 samples
+    u[30:32, 18:20] = 3 * V_D          # event B crosses the periodic boundary: blocks 18, 19, 0, 1
+    u[30:33, 0:2] = 3 * V_D
+    u[50:60, 10] = 4 * V_D             # event C: one block, 10 samples
+    u[55:58, 11] = 4 * V_D             #   ...touching C in space at the same times: still C
+    u[97:100, 5:7] = 6 * V_D           # event D: runs into the end of the recording
+    u[70, 15] = 1.99 * V_D             # just below the threshold: not slipping
+    ev = slip_events(_field(u))
+    assert ev.sizes["event"] == 4
+    order = np.argsort(ev["event_start"].values)
+    size = ev["event_size"].values[order].tolist()
+    dur = np.round(ev["event_duration"].values[order] / 1e-6).astype(int).tolist()
+    assert size == [5, 4, 2, 2] and dur == [5, 3, 10, 3]
+    assert ev["event_truncated"].values[order].tolist() == [False, False, False, True]
+    slip_a = 25 * 5 * V_D * 1e-6
+    assert ev["event_slip"].values[order][0] == pytest.approx(slip_a, rel=1e-6)
+    assert ev["event_force"].values[order][0] == pytest.approx(66.7 * slip_a, rel=1e-6)
+    slip_c = (10 + 3) * 4 * V_D * 1e-6
+    assert ev["event_slip"].values[order][2] == pytest.approx(slip_c, rel=1e-6)
+
+
+def test_psd_of_a_sinusoid_plus_noise():
+    rng = np.random.default_rng(2)
+    fs, n, f0, amp, sigma = 1e6, 2**15, 37_500.0, 3e-4, 1e-4
+    t = np.arange(n) / fs
+    u = amp * np.sin(2 * np.pi * f0 * t)[:, None] + rng.normal(0, sigma, (n, 4))
+    sp = spectra(_field(u, interval=1 / fs))
+    f, p = sp["frequency"].values, sp["psd_u"].values
+    k = int(np.argmax(p))
+    df = f[1] - f[0]
+    assert abs(f[k] - f0) <= df
+    peak = slice(k - 6, k + 7)
+    noise_floor = np.median(p)
+    assert noise_floor == pytest.approx(2 * sigma**2 / fs, rel=0.1)  # one-sided white-noise density
+    assert np.sum(p[peak] - noise_floor) * df == pytest.approx(amp**2 / 2, rel=0.05)  # Parseval: power A^2/2
+    assert median_frequency(f, p) > f0 * 0.9
+
+
+def test_field_recording_agrees_with_the_run_it_continues():
+    """Mean instantaneous f_d over a recording = the kernel's own f_d average over the same interval."""
+    cfg = make_config(N=31, theta=0.5, start="steady", v0=0.01, delta=0.2, t_total=3e-3)
+    system = build_system(cfg)
+    first = simulate(system)
+    state = state_from_run(first)
+    field = record_field(system, state, duration=1e-3, interval=1e-6)
+    cont = simulate(build_system(cfg.with_updates(t_total=1e-3, output_interval=1e-6)), state)
+    assert field.sizes["time"] == 1000 and field["time"].values[0] == pytest.approx(3e-3 + 1e-6)
+    # sample k of the field is the state at the end of interval k: interval means vs end points differ by
+    # half a sample of drive motion at most; over 1000 samples the averages agree to 1e-4
+    assert field["f_d_instant"].mean().item() == pytest.approx(cont["f_d"].mean().item(), rel=1e-4)
+    np.testing.assert_allclose(field["u"].values[-1], cont["u"].values, rtol=1e-5, atol=1e-9)
+    law = cfg.contact_law
+    u_last = field["u"].values[-1].astype(float)
+    assert field["acoustic"].values[-1] == pytest.approx(np.sum(law.force(u_last[system.contact_sites], system.vstar)),
+                                                         rel=1e-5)
+
+
+def test_mechanism_cli_on_a_small_store(tmp_path):
+    sw = make_sweep({"name": "m", "base": {"N": 31, "start": "steady", "t_total": 4e-3},
+                     "grid": {"theta": [0.2, 1.0], "v_d": [1e-3, 3e-4], "seed": [0]}})
+    st = Store.open(tmp_path / "s", sw)
+    for m in sw.members:
+        ds = run(m.config)
+        ds.attrs["status"] = "completed"  # short runs: the physics checks are beside the point here
+        st.write_member(m, ds)
+    py = [sys.executable, "-m", "slipchain"]
+    ana = subprocess.run(py + ["mechanism", "--store", str(tmp_path / "s"), "--duration", "2e-4"],
+                         capture_output=True, text=True, timeout=300)
+    assert ana.returncode == 0, ana.stderr
+    assert len(list((tmp_path / "s" / "mechanism").glob("*.nc"))) == 4
+    fig = subprocess.run(py + ["figure", "mechanism", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o")],
+                         capture_output=True, text=True, timeout=300)
+    assert fig.returncode == 0, fig.stderr
+    text = (tmp_path / "o" / "mechanism.md").read_text()
+    assert "Fraction of contacts that stick-slip" in text and text.count("| v_d = ") == 4
+    for stem in ("mechanism_stick_slip", "mechanism_contacts_events_spectra", "mechanism_force_spectra"):
+        assert (tmp_path / "o" / f"{stem}.png").stat().st_size > 5000
+    missing = subprocess.run(py + ["figure", "mechanism", "--store", str(tmp_path / "nope"), "--out", str(tmp_path)],
+                             capture_output=True, text=True, timeout=120)
+    assert missing.returncode == 2 and "not a slipchain sweep store" in missing.stderr
