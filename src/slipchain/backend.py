@@ -89,7 +89,16 @@ def kernel_params(system: System) -> np.ndarray:
     p[K.P_C] = cfg.c
     p[K.P_ETAC] = cfg.eta_c
     p[K.P_SLOW] = SLOW_FRACTION * cfg.v_d
+    if cfg.dead_weight is not None:  # constant force per upper block instead of the drive springs
+        p[K.P_KD] = 0.0
+        p[K.P_FCONST] = dead_weight_force(system)
     return p
+
+
+def dead_weight_force(system: System) -> float:
+    """F_b = mu_a*epsilon*f0*theta (theta = N_c/N realised): the hanging weight's share per upper block."""
+    cfg = system.config
+    return float(cfg.dead_weight) * cfg.epsilon * cfg.f0 * system.theta_realised if cfg.dead_weight else 0.0
 
 
 # A contact counts as "slow" (near sticking) while |u| < SLOW_FRACTION * v_d.

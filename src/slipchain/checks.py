@@ -32,7 +32,7 @@ def stored_energy(system: System, state: State) -> float:
         0.5 * cfg.K * np.sum((np.roll(x, -1) - x) ** 2)
         + 0.5 * cfg.K_L * np.sum((np.roll(X, -1) - X) ** 2)
         + 0.5 * cfg.K_T * np.sum((X - x) ** 2)
-        + 0.5 * cfg.K_d * np.sum((drive - X) ** 2)
+        + (0.5 * cfg.K_d * np.sum((drive - X) ** 2) if cfg.dead_weight is None else 0.0)  # no drive springs
     )
     return float(kinetic + elastic)
 

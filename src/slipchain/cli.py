@@ -76,6 +76,9 @@ def _print_summary(info: dict, out: Path | None) -> None:
                 "wall_time_s", "status"):
         v = info[key]
         table.add_row(key, f"{v:.4g}" if isinstance(v, float) else str(v))
+    if "velocity" in info:
+        v, e = info["velocity"], info.get("velocity_sem")
+        table.add_row("dead-weight velocity", f"{info['velocity_status']}" + ("" if v is None else f": {v:.5g} ± {e:.2g} m/s"))
     if out is not None:
         table.add_row("written to", str(out))
     Console().print(table)

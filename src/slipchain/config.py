@@ -34,6 +34,7 @@ ALLOWED: dict[str, str] = {
     "theta": "a number in (0, 1]",
     "v_d": "a number > 0 (m/s)",
     "start": "one of 'rest', 'steady'",
+    "dead_weight": "a number > 0 (applied force per block in units of epsilon*f0*theta), or absent for the spring drive",
     "dt": "a number > 0 (s)",
     "t_total": "a number > 0 (s), or absent for an automatic run length",
     "t_max": "a number > 0 (s)",
@@ -55,6 +56,10 @@ class Config(BaseModel):
     ``tau_f`` (tau_f), ``c`` (c), ``v0`` (v_0), ``delta`` (delta), ``epsilon`` (varepsilon),
     ``eta`` (eta, 0.3*omega0), ``eta_c`` (eta_c; default 0.1*omega0), ``theta`` (theta),
     ``v_d`` (v, the drive velocity), ``start`` ('rest' or 'steady', MODEL.md "Start").
+    ``dead_weight``: None (default) drives the upper layer through the springs K_d at v_d; a
+    number mu_a replaces them by a constant force F_b = mu_a*epsilon*f0*theta on every upper block
+    (a hanging weight, as in the experiment): mu_a is the applied mu_star, and the run measures
+    the velocity (``v_d`` then only sets the steady start and the "slow" threshold).
 
     Run control: ``dt`` time step; ``t_total`` fixed run length, or None for automatic
     (run until the standard error of mu_star is below ``sem_target``, at most ``t_max``);
@@ -80,6 +85,7 @@ class Config(BaseModel):
     theta: float = Field(1.0, gt=0, le=1)
     v_d: float = Field(1e-3, gt=0)
     start: Literal["rest", "steady"] = "rest"
+    dead_weight: float | None = Field(None, gt=0)
 
     dt: float = Field(2e-8, gt=0)
     t_total: float | None = Field(None, gt=0)

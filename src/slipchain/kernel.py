@@ -7,6 +7,9 @@ Equations of motion (MODEL.md; Fig. 4 of the paper), periodic in i:
     N_L m dU_i/dt = K_L (X_{i+1} + X_{i-1} - 2 X_i) + K_T (x_i - X_i) + K_d (v_d t - X_i)
                   - m eta (3 U_i - U_{i+1} - U_{i-1} - u_i)
 
+With the dead-weight drive the term K_d (v_d t - X_i) is replaced by a constant force F_b on every
+UL block (K_d = 0 and the P_FCONST parameter = F_b).
+
 Scheme (one step n -> n+1, dt):
  1. All spring, drive and inter-block damping forces from (x^n, X^n, u^n, U^n, t^n).
  2. Velocities: U^{n+1} = U^n + dt F/(N_L m); IL blocks without a contact likewise.
@@ -42,8 +45,8 @@ LN10 = math.log(10.0)
 LOG10_2 = math.log10(2.0)
 
 # Parameter columns in the (B, P) parameter array.
-P_K, P_KL, P_KT, P_KD, P_M, P_ML, P_META, P_VD, P_DT, P_AMP, P_C, P_ETAC, P_SLOW = range(13)
-N_PARAMS = 13
+P_K, P_KL, P_KT, P_KD, P_M, P_ML, P_META, P_VD, P_DT, P_AMP, P_C, P_ETAC, P_SLOW, P_FCONST = range(14)
+N_PARAMS = 14  # P_FCONST: constant force on every UL block (dead-weight drive; 0 with the spring drive)
 
 # Output columns per sample and accumulator columns.
 O_FD, O_XMEAN, O_XUMEAN = range(3)  # mean f_d over the sample; mean x and mean X at its end
@@ -194,12 +197,12 @@ def solve_contact(r, m_eff, b, c, vstar, y, p, q):
 
 
 @nb.njit(cache=True, inline="always")
-def _block_update(i, ip, im, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL):
+def _block_update(i, ip, im, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL):
     """Explicit velocity update of IL block i and UL block i with neighbours ip, im."""
     dx = meta * (ur[ip] + ur[im] + Ur[i] - 3.0 * ur[i])
     dX = meta * (Ur[ip] + Ur[im] + ur[i] - 3.0 * Ur[i])
     fx = K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i]) + dx
-    fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + dX
+    fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + fconst + dX
     un[i] = ur[i] + dtm * fx
     Un[i] = Ur[i] + dtmL * fX
     dampx[i] = dx
@@ -207,16 +210,18 @@ def _block_update(i, ip, im, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL):
+def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL):
     """Explicit velocity update of all blocks (springs, drive, damping); returns sum of drive forces.
 
     Interior blocks in one branch-free loop (vectorisable); the two periodic ends separately.
     """
     n = xr.size
     for i in range(1, n - 1):
-        _block_update(i, i + 1, i - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL)
-    _block_update(0, 1, n - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL)
-    _block_update(n - 1, 0, n - 2, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL)
+        _block_update(i, i + 1, i - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm,
+                      dtmL)
+    _block_update(0, 1, n - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL)
+    _block_update(n - 1, 0, n - 2, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm,
+                  dtmL)
     sx = 0.0
     for i in range(n):
         sx += Xr[i]
@@ -282,6 +287,7 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
         m = params[row, P_M]
         meta = params[row, P_META]
         vd = params[row, P_VD]
+        fconst = params[row, P_FCONST]
         dt = params[row, P_DT]
         dtm = dt / m
         dtmL = dt / params[row, P_ML]
@@ -309,7 +315,8 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
             fd_sum = 0.0
             for _ in range(sample_steps):
                 drive = vd * (step[row] * dt)
-                fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, dtm, dtmL)
+                fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm,
+                                        dtmL)
                 for k in range(nc):
                     rk[k] = m * un[st[k]]
                     ra[k] = abs(rk[k])

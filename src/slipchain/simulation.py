@@ -23,7 +23,7 @@ import xarray as xr
 
 from . import kernel as K
 from ._version import __version__
-from .backend import SLOW_FRACTION, Batch, get_backend
+from .backend import SLOW_FRACTION, Batch, dead_weight_force, get_backend
 from .checks import DISPLACEMENT_RTOL, CheckResult, displacement_check, energy_check, stored_energy
 from .config import Config, make_config
 from .observables import steady_estimate
@@ -31,6 +31,8 @@ from .system import State, System, build_system, initial_state
 
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
 MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
+DEAD_WEIGHT_RAMP = 0.25  # dead-weight drive: the force rises linearly over this fraction of the run
+RUNAWAY_FACTOR = 10.0  # dead-weight drive: faster than this times v0*10**delta is off the rising branch
 
 COMPLETED, DIVERGED, INTERRUPTED = "completed", "diverged", "interrupted"
 
@@ -84,8 +86,10 @@ def simulate(system: System, state: State | None = None, *, progress: bool | Non
     steps_per_sample = cfg.sample_steps
     interval = steps_per_sample * cfg.dt
     chunk = max(1, int(round(CHUNK_TIME / interval)))
-    auto = cfg.t_total is None
-    limit = max(1, int(round((cfg.t_max if auto else cfg.t_total) / interval)))
+    dead_weight = cfg.dead_weight is not None  # fixed length (t_total, else t_max); velocity measured after
+    f_b = dead_weight_force(system)
+    auto = cfg.t_total is None and not dead_weight
+    limit = max(1, int(round((cfg.t_total if cfg.t_total is not None else cfg.t_max) / interval)))
     norm = mu_star_norm(system)
     nc = system.n_contacts
 
@@ -98,7 +102,15 @@ def simulate(system: System, state: State | None = None, *, progress: bool | Non
     try:
         while rec.n < limit:
             n = min(chunk, limit - rec.n)
+            if dead_weight:  # ramp F_b up over the first DEAD_WEIGHT_RAMP of the run, one sample at a time
+                n_ramp = max(1, int(round(DEAD_WEIGHT_RAMP * limit)))
+                f_now = f_b * min(1.0, (rec.n + 1) / n_ramp)
+                n = 1 if rec.n < n_ramp else n
+                batch.params[0, K.P_FCONST] = f_now
+                sum_x0 = float(batch.X[0].sum())
             co = backend.advance(batch, n, steps_per_sample)
+            if dead_weight:  # work of the constant force over this call: F * sum_i dX_i
+                co.acc[0, K.A_WDRIVE] += f_now * (float(batch.X[0].sum()) - sum_x0)
             rec.add(co.out[0], co.acc[0], co.cacc[0, :, :nc].T)
             if batch.status[0] >= 0:
                 step = int(batch.status[0])
@@ -149,7 +161,7 @@ def _assemble(system: System, rec: _Recorder, final: State, x0_mean: float, e0: 
     checks: list[CheckResult] = []
     if status != DIVERGED and n:
         checks.append(energy_check(stored_energy(system, final) - e0, *rec.works))
-        if est is not None and est.n_samples >= 2:
+        if est is not None and est.n_samples >= 2 and cfg.dead_weight is None:
             checks.append(displacement_check(_window_velocity(series, start, x0_mean, interval), cfg.v_d))
         failed = [c for c in checks if not c.passed]
         if failed and status == COMPLETED:
@@ -217,6 +229,9 @@ def _assemble(system: System, rec: _Recorder, final: State, x0_mean: float, e0: 
         "W_damping": rec.works[K.A_WDAMP],
         "W_contacts": rec.works[K.A_WCONTACT],
     }
+    if cfg.dead_weight is not None:
+        after = time > DEAD_WEIGHT_RAMP * time[-1] if n else np.zeros(0, bool)
+        attrs.update(_dead_weight_attrs(system, time[after], series[after, K.O_XUMEAN]))
     for c in checks:
         attrs[f"check_{c.name}"] = c.value
         attrs[f"check_{c.name}_passed"] = int(c.passed)
@@ -224,14 +239,51 @@ def _assemble(system: System, rec: _Recorder, final: State, x0_mean: float, e0: 
     return ds
 
 
+def _dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> dict[str, Any]:
+    """Dead-weight drive: the applied mu_star, and the velocity measured from the slider's position
+    trace <X>(t) after the force ramp, exactly as the friction tester measures it
+    (:func:`slipchain.tester.velocity.steady_velocity`).
+
+    The force rises linearly over the first quarter of the run (a heavy slider accepts its load
+    gradually; a step load makes the light model slider overshoot past the maximum of mu(v)).
+    ``runaway``: still accelerating at the end, or sliding faster than RUNAWAY_FACTOR*v0*10**delta:
+    above the maximum of mu(v) the model slider does not stop accelerating until the contact
+    damping m*eta_c*u alone balances the load, at about a metre per second (with eta_c = 0 it never
+    stops)."""
+    from .tester.velocity import steady_velocity
+
+    cfg = system.config
+    fit = steady_velocity(time, X_mean) if time.size >= 20 else None
+    status, reason = (fit.status, fit.reason) if fit else ("no-steady", "fewer than 20 samples after the ramp")
+    v_branch = RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta  # far above the last contact's maximum
+    if fit and fit.status == "ok" and fit.velocity > v_branch:
+        status = "runaway"
+        reason = (f"runaway: the slider left the rising branch of mu(v) and slides at {fit.velocity:.3g} m/s "
+                  f"(> {RUNAWAY_FACTOR:g} v0 10**delta = {v_branch:.3g} m/s), where only the contact damping "
+                  "m eta_c u holds it")
+    return {
+        "drive": "dead-weight",
+        "mu_star": float(cfg.dead_weight),
+        "mu_star_sem": 0.0,
+        "dead_weight_force": dead_weight_force(system),
+        "velocity": fit.velocity if status == "ok" else np.nan,
+        "velocity_sem": fit.sem if status == "ok" else np.nan,
+        "velocity_status": status,
+        "velocity_reason": reason,
+    }
+
+
 SUMMARY_KEYS = ("mu_star", "mu_star_sem", "theta", "n_contacts", "N", "v_d", "eta_c", "epsilon", "seed",
-                "dt", "t_total", "t_transient", "steps", "wall_time_s", "status", "message")
+                "dt", "t_total", "t_transient", "steps", "wall_time_s", "status", "message", "velocity",
+                "velocity_sem", "velocity_status")
 
 
 def summary(ds: xr.Dataset) -> dict[str, Any]:
     """The run's headline numbers as plain Python values (the CLI's --json)."""
     out: dict[str, Any] = {}
     for key in SUMMARY_KEYS:
+        if key.startswith("velocity") and key not in ds.attrs:
+            continue
         v = ds.attrs.get(key)
         if isinstance(v, np.generic):
             v = v.item()

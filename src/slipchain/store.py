@@ -52,6 +52,8 @@ SUMMARY_VARS: dict[str, tuple[str, str]] = {
     "t_steady": ("t_steady", "steady window, s"),
     "steps": ("steps", "time steps"),
     "wall_time_s": ("wall_time_s", "wall time of the run, s"),
+    "velocity": ("velocity", "dead-weight drive: steady velocity, m/s (NaN otherwise or if runaway)"),
+    "velocity_sem": ("velocity_sem", "dead-weight drive: standard error of the velocity, m/s"),
 }
 ABSENT, MISSING = "absent", "missing"
 
@@ -166,6 +168,7 @@ class Store:
         message = np.full(shape, "", dtype=object)
         ids = np.full(shape, "", dtype=object)
         version = np.full(shape, "", dtype=object)
+        vstatus = np.full(shape, "", dtype=object)
         for m in sw.members:
             idx = tuple(coords[d].index(v) for d, v in m.point)
             ids[idx] = m.id
@@ -176,6 +179,7 @@ class Store:
             status[idx] = attrs.get("status", "error")
             message[idx] = attrs.get("message", "")
             version[idx] = attrs.get("slipchain_version", "")
+            vstatus[idx] = attrs.get("velocity_status", "")
             for k, (attr, _) in SUMMARY_VARS.items():
                 if attr in attrs:
                     data[k][idx] = float(attrs[attr])
@@ -188,6 +192,8 @@ class Store:
         ds["message"] = (dims, message.astype(str))
         ds["member_id"] = (dims, ids.astype(str))
         ds["slipchain_version"] = (dims, version.astype(str))
+        if (vstatus != "").any():
+            ds["velocity_status"] = (dims, vstatus.astype(str))
         ds.attrs.update(sweep_name=sw.name, sweep_digest=sw.digest, store=str(self.path), definition=sw.to_toml())
         return ds
 

@@ -66,9 +66,18 @@ class Member:
         return ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.point)
 
 
+# Options added after 0.1.0 whose absent value (None) switches a feature off: left out of the hash
+# while off, so stores written before the option existed stay valid.
+OPTIONAL_FEATURES = ("dead_weight",)
+
+
 def member_id(config: Config) -> str:
     """Content hash of a full config (16 hex digits): equal configs, equal ids."""
-    text = json.dumps(config.model_dump(), sort_keys=True, separators=(",", ":"))
+    data = config.model_dump()
+    for key in OPTIONAL_FEATURES:
+        if data.get(key) is None:
+            data.pop(key, None)
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
