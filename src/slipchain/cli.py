@@ -250,6 +250,25 @@ def figure_velocity(
         Console().print(f"wrote {p}")
 
 
+@figure_app.command("dead-weight")
+def figure_dead_weight(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over dead_weight (e.g. presets/dead-weight.toml).")],
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+) -> None:
+    """Applied mu_star against the measured steady velocity per theta (runaways at the right edge)."""
+    from .figures import plot_dead_weight
+    from .store import Store
+
+    try:
+        ds = Store.open(store).dataset()
+    except SweepError as e:
+        _fail(str(e))
+    if "dead_weight" not in ds.dims or "velocity_status" not in ds:
+        _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; the dead-weight figure needs dead_weight runs")
+    for p in plot_dead_weight(ds, out):
+        Console().print(f"wrote {p}")
+
+
 @app.command()
 def mechanism(
     store: Annotated[Path, typer.Option("--store", help="Store of a completed Fig. 6-like sweep.")],

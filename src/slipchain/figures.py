@@ -240,7 +240,7 @@ def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str 
         f = a["frequency"].values[1:]
         axes[0].plot(f, a["psd_f_d"].values[1:], color=color, ls=ls, lw=1, label=label)
         axes[1].plot(f, a["psd_acoustic"].values[1:], color=color, ls=ls, lw=1, label=label)
-    for ax, what in zip(axes, (r"$f_d(t)$ (N$^2$/Hz)", r"acoustic proxy $\sum_i f(u_i, v^*_i)$ (N$^2$/Hz)")):
+    for ax, what in zip(axes, (r"$f_d(t)$ (N$^2$/Hz)", r"$A(t) = \sum_i f(u_i, v^*_i)$ (N$^2$/Hz)")):
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("frequency (Hz)")
@@ -283,3 +283,41 @@ def plot_velocity(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
                                                       if other else ""), fontsize=10)
     ax.legend(fontsize=8)
     return _save(fig, out, "velocity")
+
+
+def plot_dead_weight(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """mu(v) measured as the tester does: applied mu_a (dead_weight) against the steady velocity, per theta.
+
+    Runaway members are drawn at the right edge (open triangles) at their applied mu_a.
+    """
+    plt = _pyplot()
+    if "dead_weight" not in ds.dims:
+        raise ValueError(f"the sweep has dimensions {list(ds.dims)}; a dead-weight figure needs dead_weight")
+    cfg = base_config(ds)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    other = [d for d in ds.dims if d not in ("dead_weight", "theta")]
+    sub = ds.isel({d: 0 for d in other}) if other else ds
+    thetas = sub["theta"].values.tolist() if "theta" in sub.dims else [None]
+    colors = plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))
+    v_ok = ds["velocity"].values[np.isfinite(ds["velocity"].values)]
+    v_edge = v_ok.max() * 3 if v_ok.size else 1.0
+    for th, color in zip(thetas, colors):
+        cur = sub.sel(theta=th) if th is not None else sub
+        mu = cur["dead_weight"].values
+        v, e = cur["velocity"].values, cur["velocity_sem"].values
+        ok = np.isfinite(v)
+        label = rf"$\theta$ = {th:g}" if th is not None else "model"
+        ax.errorbar(v[ok], mu[ok], xerr=e[ok], color=color, marker="o", capsize=2, label=label + ": steady")
+        run = cur["velocity_status"].values == "runaway"
+        if run.any():
+            ax.plot(np.full(run.sum(), v_edge), mu[run], marker=">", ls="none", color=color, mfc="white",
+                    label=label + ": runaway")
+    vv = np.geomspace(max(v_ok.min() / 3, 1e-9) if v_ok.size else 1e-7, v_edge, 200)
+    ax.plot(vv, cfg.contact_law.force(vv, cfg.v0) / (cfg.epsilon * cfg.f0), color="0.5", ls=":",
+            label=r"$f(v, v_0)/(\varepsilon f_0)$")
+    ax.set_xscale("log")
+    ax.set_xlabel("steady velocity (m/s)")
+    ax.set_ylabel(r"applied $\mu^*$ (dead weight)")
+    ax.set_title("Dead-weight drive: mu(v) measured as the tester does", fontsize=10)
+    ax.legend(fontsize=7)
+    return _save(fig, out, "dead_weight")
