@@ -127,3 +127,36 @@ def test_mechanism_cli_on_a_small_store(tmp_path):
     missing = subprocess.run(py + ["figure", "mechanism", "--store", str(tmp_path / "nope"), "--out", str(tmp_path)],
                              capture_output=True, text=True, timeout=120)
     assert missing.returncode == 2 and "not a slipchain sweep store" in missing.stderr
+
+
+def _tiny_store(path, grids, base=None):
+    sw = make_sweep({"name": path.name, "base": base or {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2,
+                                                         "t_total": 3e-3}, "grid": grids})
+    st = Store.open(path, sw)
+    for m in sw.members:
+        st.write_member(m, run(m.config))
+    return st
+
+
+def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
+    py = [sys.executable, "-m", "slipchain", "figure"]
+    _tiny_store(tmp_path / "vel", {"v_d": [1e-4, 1e-3], "theta": [0.5, 1.0], "seed": [0, 1]})
+    _tiny_store(tmp_path / "eps", [{"epsilon": [1e-2], "dt": [2e-8], "theta": [0.5, 1.0], "seed": [0]},
+                                   {"epsilon": [5e-3], "dt": [1e-8], "theta": [0.5, 1.0], "seed": [0]}])
+    _tiny_store(tmp_path / "dw", {"dead_weight": [0.5, 0.9, 1.05], "theta": [1.0]},
+                base={"N": 3, "theta": 1 / 3, "delta": 0.0, "t_total": 4e-3})
+    vel = subprocess.run(py + ["velocity", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o")],
+                         capture_output=True, text=True, timeout=120)
+    assert vel.returncode == 0, vel.stderr
+    eps = subprocess.run(py + ["epsilon", "--store", str(tmp_path / "eps"), "--out", str(tmp_path / "o")],
+                         capture_output=True, text=True, timeout=120)
+    assert eps.returncode == 0, eps.stderr
+    assert "epsilon = 0.01:" in eps.stdout and "epsilon = 0.005:" in eps.stdout and "ratio" in eps.stdout
+    dw = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--out", str(tmp_path / "o")],
+                        capture_output=True, text=True, timeout=120)
+    assert dw.returncode == 0, dw.stderr
+    for stem in ("velocity", "epsilon", "dead_weight"):
+        assert (tmp_path / "o" / f"{stem}.png").stat().st_size > 5000 and (tmp_path / "o" / f"{stem}.pdf").exists()
+    wrong = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o")],
+                           capture_output=True, text=True, timeout=120)
+    assert wrong.returncode == 2 and "needs dead_weight" in wrong.stderr

@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 from typing import Annotated, Optional
 
+import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
@@ -248,6 +249,35 @@ def figure_velocity(
         _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; the velocity figure needs v_d")
     for p in plot_velocity(ds, out):
         Console().print(f"wrote {p}")
+
+
+@figure_app.command("epsilon")
+def figure_epsilon(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over epsilon and theta (presets/epsilon.toml).")],
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+) -> None:
+    """mu_star versus theta for each epsilon, and the drop from the smallest theta to the largest."""
+    from .figures import epsilon_table, plot_epsilon
+    from .store import Store
+
+    try:
+        ds = Store.open(store).dataset()
+    except SweepError as e:
+        _fail(str(e))
+    if not {"epsilon", "theta"} <= set(ds.dims):
+        _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; the epsilon figure needs epsilon and theta")
+    for p in plot_epsilon(ds, out):
+        Console().print(f"wrote {p}")
+    avg = epsilon_table(ds)
+    for eps in avg["epsilon"].values:
+        cur = avg.sel(epsilon=eps).dropna("theta", subset=["mu"])
+        if cur.sizes["theta"] >= 2:
+            a, b = cur.isel(theta=0), cur.isel(theta=-1)
+            r = float(b["mu"] / a["mu"])
+            e = r * float(np.hypot(a["err"] / a["mu"], b["err"] / b["mu"]))
+            Console().print(f"epsilon = {eps:g}: mu_star {float(a['mu']):.4f} ± {float(a['err']):.4f} at theta = "
+                            f"{float(a['theta']):g} -> {float(b['mu']):.4f} ± {float(b['err']):.4f} at theta = "
+                            f"{float(b['theta']):g}; ratio {r:.3f} ± {e:.3f}")
 
 
 @figure_app.command("dead-weight")

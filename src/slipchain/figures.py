@@ -321,3 +321,35 @@ def plot_dead_weight(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     ax.set_title("Dead-weight drive: mu(v) measured as the tester does", fontsize=10)
     ax.legend(fontsize=7)
     return _save(fig, out, "dead_weight")
+
+
+def epsilon_table(ds: xr.Dataset) -> xr.Dataset:
+    """Seed-averaged mu_star on (epsilon, theta): each epsilon at the time step it was run with."""
+    from .reproduction import seed_average
+
+    avg = seed_average(ds)
+    if "dt" in avg.dims:  # every epsilon has its own dt: keep, per epsilon, the dt that has data
+        picks = []
+        for eps in avg["epsilon"].values:
+            cur = avg.sel(epsilon=eps)
+            best = int(np.argmax(cur["n"].sum("theta").values))
+            picks.append(cur.isel(dt=best).drop_vars("dt").assign_coords(dt_used=cur["dt"].values[best]))
+        avg = xr.concat(picks, dim="epsilon", coords="different", compat="equals", join="outer")
+    return avg
+
+
+def plot_epsilon(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """mu_star versus theta for each epsilon (the contact-force scale of eq. 1)."""
+    plt = _pyplot()
+    avg = epsilon_table(ds)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    colors = plt.cm.plasma(np.linspace(0, 0.8, avg.sizes["epsilon"]))
+    for eps, color in zip(avg["epsilon"].values, colors):
+        cur = avg.sel(epsilon=eps).dropna("theta", subset=["mu"])
+        ax.errorbar(cur["theta"], cur["mu"], yerr=cur["err"], color=color, marker="o", capsize=2,
+                    label=rf"$\varepsilon$ = {eps:g} (dt = {float(cur['dt_used']) if 'dt_used' in cur.coords else 0:g} s)")
+    ax.set_xlabel(r"$\theta$")
+    ax.set_ylabel(r"$\mu^*$")
+    ax.set_title(r"The load effect for several $\varepsilon$ ($v_d = v_0$)", fontsize=10)
+    ax.legend(fontsize=8)
+    return _save(fig, out, "epsilon")
