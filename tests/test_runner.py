@@ -150,3 +150,32 @@ def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_pa
     assert refused.returncode == 2
     assert "different sweep definition" in refused.stderr and "theta" in refused.stderr
     assert len(list(Path(tmp_path / "s" / "members").glob("*.nc"))) == 2  # nothing mixed in
+
+
+def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
+    definition = tmp_path / "sweep.toml"
+    definition.write_text(
+        'name = "sigint"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
+        f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(8)))}]\n")
+    store = tmp_path / "s"
+    proc = subprocess.Popen([sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store),
+                             "--workers", "2", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    members = store / "members"
+    try:
+        t_end = time.time() + 120
+        while time.time() < t_end and len(list(members.glob("*.nc")) if members.exists() else []) < 1:
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        os.kill(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    assert proc.returncode == 130, err
+    assert "(interrupted)" in out
+    done = list(members.glob("*.nc"))
+    assert 1 <= len(done) < 8 and all(read_dataset(p).attrs["status"] == "completed" for p in done)
+    assert Store.open(store).invocations()[-1]["interrupted"] is True
