@@ -276,6 +276,8 @@ def plot_velocity(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     v = np.geomspace(float(avg["v_d"].min()), float(avg["v_d"].max()), 200)
     ax.plot(v, cfg.contact_law.force(v, cfg.v0) / (cfg.epsilon * cfg.f0), color="0.5", ls=":",
             label=r"$f(v, v_0)/(\varepsilon f_0)$")
+    ax.axvline(cfg.v0 * 10 ** -cfg.delta, color="0.7", lw=0.8, ls="--",
+               label=r"smallest $v^*$ = $v_0\,10^{-\delta}$")
     ax.set_xscale("log")
     ax.set_xlabel(r"$v_d$ (m/s)")
     ax.set_ylabel(r"$\mu^*$")
