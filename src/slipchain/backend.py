@@ -127,7 +127,15 @@ class CPUBackend:
         return ChunkOutput(out, acc, cacc)
 
 
-def get_backend(name: str) -> CPUBackend:
+def get_backend(name: str):
+    """The backend for a config's ``backend``: 'cpu', 'gpu' (numba.cuda; error without a GPU) or
+    'auto' (the GPU when numba.cuda finds one, else the CPU)."""
     if name == "cpu":
         return CPUBackend()
-    raise ValueError(f"backend {name!r} is not available; expected 'cpu'")
+    from .gpu import GPUBackend, cuda_available
+
+    if name == "gpu" or (name == "auto" and cuda_available()):
+        return GPUBackend()
+    if name == "auto":
+        return CPUBackend()
+    raise ValueError(f"config key 'backend' has value {name!r}; expected one of 'cpu', 'gpu', 'auto'")

@@ -41,7 +41,7 @@ ALLOWED: dict[str, str] = {
     "sem_target": "a number > 0",
     "output_interval": "a number > 0 (s), at least dt",
     "seed": "an integer >= 0",
-    "backend": "'cpu'",
+    "backend": "one of 'cpu', 'gpu', 'auto' (the GPU if numba.cuda finds one)",
 }
 
 
@@ -93,7 +93,7 @@ class Config(BaseModel):
     sem_target: float = Field(0.01, gt=0)
     output_interval: float = Field(1e-5, gt=0)
     seed: int = Field(0, ge=0)
-    backend: Literal["cpu"] = "cpu"
+    backend: Literal["cpu", "gpu", "auto"] = "cpu"
 
     @model_validator(mode="after")
     def _check_combinations(self) -> "Config":

@@ -74,6 +74,7 @@ OPTIONAL_FEATURES = ("dead_weight",)
 def member_id(config: Config) -> str:
     """Content hash of a full config (16 hex digits): equal configs, equal ids."""
     data = config.model_dump()
+    data["backend"] = "cpu"  # where a member runs is not what it is: CPU and GPU results share ids
     for key in OPTIONAL_FEATURES:
         if data.get(key) is None:
             data.pop(key, None)
