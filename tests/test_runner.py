@@ -179,3 +179,17 @@ def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
     done = list(members.glob("*.nc"))
     assert 1 <= len(done) < 8 and all(read_dataset(p).attrs["status"] == "completed" for p in done)
     assert Store.open(store).invocations()[-1]["interrupted"] is True
+
+
+def test_batched_tasks_store_the_same_members(tmp_path, client):
+    from slipchain.runner import batches
+
+    sw = make_sweep({"name": "b", "base": FAST, "grid": {"theta": [0.5, 1.0], "seed": [0, 1], "N": [31, 41]}})
+    groups = batches(sw.members, 3)
+    assert sorted(len(g) for g in groups) == [1, 1, 3, 3]
+    assert all(len({m.config.N for m in g}) == 1 for g in groups)
+    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False, batch_size=3)
+    assert rep.ok and len(rep.ran) == 8
+    st = Store.open(tmp_path / "s")
+    for m in sw.members[:3]:
+        assert st.read_member(m).attrs["mu_star"] == run(m.config).attrs["mu_star"]

@@ -47,14 +47,18 @@ def run(
     out: Annotated[Optional[Path], typer.Option("--out", help="Write the result Dataset to this NetCDF file.")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object with the headline numbers.")] = False,
     progress: Annotated[Optional[bool], typer.Option("--progress/--no-progress", help="Progress bar (default: on a terminal).")] = None,
+    backend: Annotated[Optional[str], typer.Option("--backend", help="cpu, gpu or auto (overrides the config's backend).")] = None,
 ) -> None:
     """Run one realisation of the model and report mu_star with its standard error."""
     try:
-        cfg = load_config(config, set_)
+        cfg = load_config(config, [*set_, *([f'backend="{backend}"'] if backend else [])])
     except ConfigError as e:
         err.print(f"error: {e}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(2)
-    ds = simulate(build_system(cfg), progress=progress)
+    try:
+        ds = simulate(build_system(cfg), progress=progress)
+    except RuntimeError as e:  # e.g. backend 'gpu' without a GPU
+        _fail(str(e))
     if out is not None:
         write_dataset(ds, out)
     info = summary(ds)
@@ -92,6 +96,7 @@ def _fail(message: str) -> None:
 
 WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="Local cluster size (default: one process per core).")]
 SchedulerOpt = Annotated[Optional[str], typer.Option("--scheduler", help="Address of an existing Dask scheduler, e.g. tcp://host:8786.")]
+BackendOpt = Annotated[Optional[str], typer.Option("--backend", help="cpu, gpu or auto (overrides the config's backend).")]
 ProgressOpt = Annotated[Optional[bool], typer.Option("--progress/--no-progress", help="Progress bar (default: on a terminal).")]
 
 
@@ -102,11 +107,16 @@ def sweep(
     scheduler: SchedulerOpt = None,
     workers: WorkersOpt = None,
     progress: ProgressOpt = None,
+    backend: BackendOpt = None,
+    batch_size: Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Members per task, advanced together (default 1; 256 on the GPU).")] = None,
 ) -> None:
     """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
+    if backend not in (None, "cpu", "gpu", "auto"):
+        _fail(f"option --backend has value {backend!r}; expected one of cpu, gpu, auto")
     try:
         sw = load_sweep_definition(definition)
-        report = run_sweep(sw, store, scheduler=scheduler, n_workers=workers, progress=progress)
+        report = run_sweep(sw, store, scheduler=scheduler, n_workers=workers, progress=progress, backend=backend,
+                           batch_size=batch_size)
     except SweepError as e:
         _fail(str(e))
     print_sweep_report(report)
@@ -383,15 +393,19 @@ def reproduce(
     scheduler: SchedulerOpt = None,
     workers: WorkersOpt = None,
     progress: ProgressOpt = None,
+    backend: BackendOpt = None,
 ) -> None:
     """The main job: the Fig. 6 sweep (resumable), Figs. 5 and 6, and report.md with the paper's claims."""
     from .reproduce import reproduce as _reproduce
 
     if preset not in PRESETS:
         _fail(f"option --preset has value {preset!r}; expected one of {', '.join(PRESETS)}")
+    if backend not in (None, "cpu", "gpu", "auto"):
+        _fail(f"option --backend has value {backend!r}; expected one of cpu, gpu, auto")
     command = " ".join(["slipchain", "reproduce", *sys.argv[2:]]) if len(sys.argv) > 1 else ""
     try:
-        result = _reproduce(preset, store, out, scheduler=scheduler, n_workers=workers, progress=progress, command=command)
+        result = _reproduce(preset, store, out, scheduler=scheduler, n_workers=workers, progress=progress, command=command,
+                            backend=backend)
     except SweepError as e:
         _fail(str(e))
     print_sweep_report(result.sweep)

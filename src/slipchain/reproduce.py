@@ -31,14 +31,14 @@ def default_paths(preset: str) -> tuple[Path, Path]:
 
 def reproduce(preset: str = "quick", store: str | os.PathLike | None = None, out: str | os.PathLike | None = None, *,
               scheduler: str | None = None, n_workers: int | None = None, progress: bool | None = None,
-              command: str = "") -> Reproduction:
+              command: str = "", backend: str | None = None) -> Reproduction:
     """Run (or resume) the preset's sweep; if every member completed, make the figures and report."""
     sweep = load_preset(preset)
     d_store, d_out = default_paths(preset)
     store_path = Path(store) if store is not None else d_store
     out_path = Path(out) if out is not None else d_out
     st = Store.open(store_path, sweep)
-    rep = run_sweep(sweep, st, scheduler=scheduler, n_workers=n_workers, progress=progress)
+    rep = run_sweep(sweep, st, scheduler=scheduler, n_workers=n_workers, progress=progress, backend=backend)
     if rep.interrupted:
         return Reproduction(rep, None, [])
     return Reproduction(rep, *write_outputs(st, out_path, command=command or f"slipchain reproduce --preset {preset}"))

@@ -38,6 +38,7 @@ from .store import Store
 from .sweep import Member, SweepDefinition
 
 ERROR = "error"
+GPU_BATCH = 256  # members per task with the GPU backend
 
 
 def run_member(config: Config) -> xr.Dataset:
@@ -46,6 +47,27 @@ def run_member(config: Config) -> xr.Dataset:
     from .system import build_system
 
     return simulate(build_system(config), progress=False)
+
+
+def run_members(configs: list[Config]) -> list[xr.Dataset]:
+    """Several members in one batch (executed on a worker): one kernel launch advances all of them."""
+    from .simulation import simulate_batch
+    from .system import build_system
+
+    return simulate_batch([build_system(c) for c in configs], progress=False)
+
+
+def batches(members: list[Member], size: int) -> list[list[Member]]:
+    """Members grouped for :func:`run_members`: equal N, dt and output interval, at most ``size`` each,
+    similar expected cost together (the input order, by decreasing cost, is kept)."""
+    groups: dict[tuple, list[Member]] = {}
+    for m in members:
+        c = m.config
+        groups.setdefault((c.N, c.dt, c.sample_steps), []).append(m)
+    out = []
+    for g in groups.values():
+        out += [g[i:i + size] for i in range(0, len(g), size)]
+    return sorted(out, key=lambda b: -max(expected_cost(m) for m in b))
 
 
 def error_dataset(member: Member, exc: BaseException) -> xr.Dataset:
@@ -122,12 +144,19 @@ def dask_client(scheduler: str | None = None, n_workers: int | None = None) -> I
 
 
 def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, scheduler: str | None = None,
-              n_workers: int | None = None, client: object | None = None, progress: bool | None = None) -> SweepReport:
+              n_workers: int | None = None, client: object | None = None, progress: bool | None = None,
+              backend: str | None = None, batch_size: int | None = None) -> SweepReport:
     """Run the members of ``sweep`` that ``store`` does not hold yet; write each as it finishes.
 
     ``client``: an existing ``distributed.Client`` to use (tests); else ``scheduler`` (an
-    address) or a new local cluster of ``n_workers`` processes (default: one per core).
+    address) or a new local cluster of ``n_workers`` processes (default: one per core; one with
+    ``backend = 'gpu'``). ``backend`` overrides the members' backend (it is not part of their
+    identity). ``batch_size``: members per task, advanced together by one kernel launch
+    (:func:`run_members`); default 1 on the CPU, 256 with ``backend = 'gpu'``.
     """
+    if backend == "gpu":
+        batch_size = batch_size or GPU_BATCH
+        n_workers = n_workers or 1
     st = store if isinstance(store, Store) else Store.open(store, sweep)
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
@@ -135,14 +164,17 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     report = SweepReport(store=st.path, total=len(st.sweep.members),
                          skipped=[m for m in st.sweep.members if m.id in done])
     pending = sorted(st.pending(), key=expected_cost, reverse=True)
+    if backend is not None:
+        pending = [Member(m.point, m.config.with_updates(backend=backend), m.id) for m in pending]
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
         if pending:
+            groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
             if client is not None:
-                _execute(client, st, pending, report, bar)
+                _execute(client, st, groups, report, bar)
             else:
                 with dask_client(scheduler, n_workers) as c:
-                    _execute(c, st, pending, report, bar)
+                    _execute(c, st, groups, report, bar)
     except KeyboardInterrupt:
         report.interrupted = True
     finally:
@@ -157,27 +189,35 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     return report
 
 
-def _execute(client, st: Store, pending: list[Member], report: SweepReport, bar: "_SweepProgress") -> None:
+def _execute(client, st: Store, groups: list[list[Member]], report: SweepReport, bar: "_SweepProgress") -> None:
     from distributed import as_completed
 
     futures = {}
-    for m in pending:
-        fut = client.submit(run_member, m.config, key=f"slipchain-member-{m.id}", priority=expected_cost(m), pure=False)
-        futures[fut] = m
+    for g in groups:
+        cost = max(expected_cost(m) for m in g)
+        if len(g) == 1:
+            fut = client.submit(run_member, g[0].config, key=f"slipchain-member-{g[0].id}", priority=cost, pure=False)
+        else:
+            fut = client.submit(run_members, [m.config for m in g], key=f"slipchain-batch-{g[0].id}-{len(g)}",
+                                priority=cost, pure=False)
+        futures[fut] = g
     try:
         for fut in as_completed(list(futures)):
-            m = futures.pop(fut)
+            g = futures.pop(fut)
             try:
-                ds = fut.result()
+                result = fut.result()
+                results = [result] if len(g) == 1 else result
             except Exception as exc:  # the task raised, or its workers kept dying (KilledWorker)
-                ds = error_dataset(m, exc)
-            st.write_member(m, ds)
+                results = [error_dataset(m, exc) for m in g]
+            for m, ds in zip(g, results):
+                st.write_member(m, ds)
+                a = ds.attrs
+                report.ran.append(Outcome(m, str(a.get("status", ERROR)), str(a.get("message", "")),
+                                          float(a.get("mu_star", float("nan"))),
+                                          float(a.get("mu_star_sem", float("nan"))),
+                                          float(a.get("wall_time_s", float("nan")))))
+                bar.advance(report)
             fut.release()
-            a = ds.attrs
-            report.ran.append(Outcome(m, str(a.get("status", ERROR)), str(a.get("message", "")),
-                                      float(a.get("mu_star", float("nan"))), float(a.get("mu_star_sem", float("nan"))),
-                                      float(a.get("wall_time_s", float("nan")))))
-            bar.advance(report)
     finally:
         if futures:  # interrupted: drop the tasks still queued or running
             client.cancel(list(futures))
@@ -212,5 +252,5 @@ class _SweepProgress:
             self._bar.stop()
 
 
-__all__ = ["Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
+__all__ = ["GPU_BATCH", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
            "run_member", "run_sweep"]

@@ -78,64 +78,118 @@ def run(config: Config | Mapping[str, Any] | None = None, *, progress: bool | No
 
 def simulate(system: System, state: State | None = None, *, progress: bool | None = None) -> xr.Dataset:
     """Integrate one realisation from ``state`` (default: the config's start) to a result Dataset."""
-    cfg = system.config
-    backend = get_backend(cfg.backend)
-    state0 = initial_state(system) if state is None else state.copy()
-    batch = Batch.pack([system], [state0])
-    e0 = stored_energy(system, state0)
-    steps_per_sample = cfg.sample_steps
-    interval = steps_per_sample * cfg.dt
-    chunk = max(1, int(round(CHUNK_TIME / interval)))
-    dead_weight = cfg.dead_weight is not None  # fixed length (t_total, else t_max); velocity measured after
-    f_b = dead_weight_force(system)
-    auto = cfg.t_total is None and not dead_weight
-    limit = max(1, int(round((cfg.t_total if cfg.t_total is not None else cfg.t_max) / interval)))
-    norm = mu_star_norm(system)
-    nc = system.n_contacts
+    return simulate_batch([system], None if state is None else [state], progress=progress)[0]
 
-    x0_mean = float(np.mean(state0.x))
-    rec = _Recorder()
-    status, message = COMPLETED, ""
-    sem_reached = not auto
+
+@dataclass
+class _Row:
+    """The run control of one realisation of a batch."""
+
+    system: System
+    state0: State
+    e0: float
+    norm: float
+    limit: int
+    auto: bool
+    f_b: float
+    x0_mean: float
+    rec: _Recorder = field(default_factory=_Recorder)
+    active: bool = True
+    status: str = COMPLETED
+    message: str = ""
+    sem_reached: bool = False
+    sem: float = float("nan")
+
+
+def simulate_batch(systems: list[System], states: list[State] | None = None, *,
+                   progress: bool | None = None) -> list[xr.Dataset]:
+    """Integrate several realisations together (one backend call advances all of them).
+
+    They must share N, dt and the output interval (one kernel launch runs them in lock-step);
+    each row has its own length control (fixed, automatic, dead-weight ramp) and stops on its
+    own: a finished row is skipped by the kernel. On the GPU this is how a sweep fills the device.
+    The wall time recorded for every row is the batch's.
+    """
+    cfg0 = systems[0].config
+    for s in systems:
+        c = s.config
+        if (c.N, c.dt, c.sample_steps) != (cfg0.N, cfg0.dt, cfg0.sample_steps):
+            raise ValueError("a batch needs equal N, dt and output_interval; got "
+                             f"{(c.N, c.dt, c.output_interval)} and {(cfg0.N, cfg0.dt, cfg0.output_interval)}")
+    backend = get_backend(cfg0.backend)
+    states0 = [initial_state(s) if states is None or states[i] is None else states[i].copy()
+               for i, s in enumerate(systems)]
+    batch = Batch.pack(systems, states0)
+    steps_per_sample = cfg0.sample_steps
+    interval = steps_per_sample * cfg0.dt
+    chunk = max(1, int(round(CHUNK_TIME / interval)))
+    rows = []
+    for s, st in zip(systems, states0):
+        c = s.config
+        dead_weight = c.dead_weight is not None  # fixed length (t_total, else t_max); velocity measured after
+        rows.append(_Row(system=s, state0=st, e0=stored_energy(s, st), norm=mu_star_norm(s),
+                         limit=max(1, int(round((c.t_total if c.t_total is not None else c.t_max) / interval))),
+                         auto=c.t_total is None and not dead_weight, f_b=dead_weight_force(s) if dead_weight else 0.0,
+                         x0_mean=float(np.mean(st.x)), sem_reached=not (c.t_total is None and not dead_weight)))
     wall0 = _time.perf_counter()
-    bar = _Progress(progress, limit * interval, auto)
+    single = len(rows) == 1
+    bar = _Progress(progress if single else False, rows[0].limit * interval, rows[0].auto)
     try:
-        while rec.n < limit:
-            n = min(chunk, limit - rec.n)
-            if dead_weight:  # ramp F_b up over the first DEAD_WEIGHT_RAMP of the run, one sample at a time
-                n_ramp = max(1, int(round(DEAD_WEIGHT_RAMP * limit)))
-                f_now = f_b * min(1.0, (rec.n + 1) / n_ramp)
-                n = 1 if rec.n < n_ramp else n
-                batch.params[0, K.P_FCONST] = f_now
-                sum_x0 = float(batch.X[0].sum())
+        while any(r.active for r in rows):
+            live = [i for i, r in enumerate(rows) if r.active]
+            n = min(chunk, min(rows[i].limit - rows[i].rec.n for i in live))
+            f_now = np.zeros(len(rows))
+            sum_x0 = batch.X.sum(axis=1)
+            for i in live:  # dead weight: F_b ramps up over the first DEAD_WEIGHT_RAMP of the run, a sample at a time
+                r = rows[i]
+                if r.system.config.dead_weight is not None:
+                    n_ramp = max(1, int(round(DEAD_WEIGHT_RAMP * r.limit)))
+                    f_now[i] = r.f_b * min(1.0, (r.rec.n + 1) / n_ramp)
+                    batch.params[i, K.P_FCONST] = f_now[i]
+                    if r.rec.n < n_ramp:
+                        n = 1
             co = backend.advance(batch, n, steps_per_sample)
-            if dead_weight:  # work of the constant force over this call: F * sum_i dX_i
-                co.acc[0, K.A_WDRIVE] += f_now * (float(batch.X[0].sum()) - sum_x0)
-            rec.add(co.out[0], co.acc[0], co.cacc[0, :, :nc].T)
-            if batch.status[0] >= 0:
-                step = int(batch.status[0])
-                status = DIVERGED
-                message = f"non-finite state at step {step} (t = {step * cfg.dt:.6e} s)"
-                break
-            sem = float("nan")
-            if auto:
-                series = rec.series()
-                est = steady_estimate(series[:, K.O_FD] / norm)
-                sem = est.sem
-                if (est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target
-                        and _follows_drive(series, est.start, x0_mean, interval, cfg.v_d)):
-                    sem_reached = True
-                    break
-            bar.update(rec.n * interval, sem, _time.perf_counter() - wall0)
+            co.acc[:, K.A_WDRIVE] += f_now * (batch.X.sum(axis=1) - sum_x0)  # work of the constant forces
+            for i in live:
+                r = rows[i]
+                nc = r.system.n_contacts
+                r.rec.add(co.out[i], co.acc[i], co.cacc[i, :, :nc].T)
+                cfg = r.system.config
+                if batch.status[i] >= 0:
+                    step = int(batch.status[i])
+                    r.status, r.active = DIVERGED, False
+                    r.message = f"non-finite state at step {step} (t = {step * cfg.dt:.6e} s)"
+                    continue
+                if r.auto:
+                    series = r.rec.series()
+                    est = steady_estimate(series[:, K.O_FD] / r.norm)
+                    r.sem = est.sem
+                    if (est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target
+                            and _follows_drive(series, est.start, r.x0_mean, interval, cfg.v_d)):
+                        r.sem_reached = True
+                        r.active = False
+                if r.rec.n >= r.limit:
+                    r.active = False
+                if not r.active:
+                    batch.status[i] = batch.step[i]  # finished: the kernel skips this row from now on
+            bar.update(rows[0].rec.n * interval, rows[0].sem, _time.perf_counter() - wall0)
     except KeyboardInterrupt:
-        status, message = INTERRUPTED, f"interrupted by the user at t = {rec.n * interval:.6e} s"
+        for r in rows:
+            if r.active:
+                r.status, r.active = INTERRUPTED, False
+                r.message = f"interrupted by the user at t = {r.rec.n * interval:.6e} s"
     finally:
         bar.close()
     wall = _time.perf_counter() - wall0
-    if auto and status == COMPLETED and not sem_reached:
-        message = f"t_max = {cfg.t_max:g} s reached before the standard error fell below sem_target = {cfg.sem_target:g}"
-    final = batch.state(0)
-    return _assemble(system, rec, final, x0_mean, e0, norm, interval, steps_per_sample, status, message, sem_reached, wall)
+    results = []
+    for i, r in enumerate(rows):
+        cfg = r.system.config
+        if r.auto and r.status == COMPLETED and not r.sem_reached:
+            r.message = (f"t_max = {cfg.t_max:g} s reached before the standard error fell below "
+                         f"sem_target = {cfg.sem_target:g}")
+        results.append(_assemble(r.system, r.rec, batch.state(i), r.x0_mean, r.e0, r.norm, interval, steps_per_sample,
+                                 r.status, r.message, r.sem_reached, wall))
+    return results
 
 
 def _window_velocity(series: np.ndarray, start: int, x0_mean: float, interval: float) -> float:
