@@ -106,3 +106,13 @@ def test_automatic_length_does_not_stop_during_loading():
     assert ds.attrs["status"] == "completed", ds.attrs["message"]
     assert ds.attrs["check_slider_follows_drive"] <= 0.05
     assert ds.attrs["mu_star_sem"] <= 0.01
+
+
+def test_automatic_length_slides_at_least_a_micrometre_at_low_drive_velocity():
+    """A steady start at very low v_d looks converged long before it has settled; the automatic
+    stop waits until the drive has moved MIN_STEADY_SLIDE through the steady window."""
+    from slipchain.simulation import MIN_STEADY_SLIDE
+
+    ds = run({"N": 31, "theta": 0.5, "start": "steady", "v_d": 1e-5, "t_max": 1.0})
+    assert ds.attrs["status"] == "completed" and ds.attrs["sem_target_reached"] == 1
+    assert ds.attrs["t_steady"] * 1e-5 >= MIN_STEADY_SLIDE

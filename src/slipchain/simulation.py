@@ -5,8 +5,9 @@ in compiled code, accumulating per sample the mean driving force f_d and the mea
 displacements, and per contact the sums of force, velocity, velocity squared and slow steps.
 Python then (1) appends these, (2) stops with status ``diverged`` if a row went non-finite,
 (3) in automatic mode, estimates mu_star on what has been sampled so far (MSER transient, batch
-means) and stops once its standard error is below ``sem_target`` and the steady window shows no
-drift, or at ``t_max``. After the loop: energy balance and displacement checks, then the Dataset.
+means) and stops once its standard error is below ``sem_target``, the steady window shows no
+drift and the drive has moved at least MIN_STEADY_SLIDE (1 um) through it, or at ``t_max``.
+After the loop: energy balance and displacement checks, then the Dataset.
 
 mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (MODEL.md, "Start and measurement").
 """
@@ -31,6 +32,8 @@ from .system import State, System, build_system, initial_state
 
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
 MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
+MIN_STEADY_SLIDE = 1e-6  # ...and a steady window in which the drive has moved at least this far (m):
+# at very low v_d a steady start can look converged (tiny SE, no drift) long before it has settled
 DEAD_WEIGHT_RAMP = 0.25  # dead-weight drive: the force rises linearly over this fraction of the run
 RUNAWAY_FACTOR = 10.0  # dead-weight drive: faster than this times v0*10**delta is off the rising branch
 
@@ -165,6 +168,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
                     est = steady_estimate(series[:, K.O_FD] / r.norm)
                     r.sem = est.sem
                     if (est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target
+                            and est.n_samples * interval * cfg.v_d >= MIN_STEADY_SLIDE
                             and _follows_drive(series, est.start, r.x0_mean, interval, cfg.v_d)):
                         r.sem_reached = True
                         r.active = False
