@@ -309,7 +309,8 @@ def plot_dead_weight(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
         v, e = cur["velocity"].values, cur["velocity_sem"].values
         ok = np.isfinite(v)
         label = rf"$\theta$ = {th:g}" if th is not None else "model"
-        ax.errorbar(v[ok], mu[ok], xerr=e[ok], color=color, marker="o", capsize=2, label=label + ": steady")
+        if ok.any():
+            ax.errorbar(v[ok], mu[ok], xerr=e[ok], color=color, marker="o", capsize=2, label=label + ": steady")
         run = cur["velocity_status"].values == "runaway"
         if run.any():
             ax.plot(np.full(run.sum(), v_edge), mu[run], marker=">", ls="none", color=color, mfc="white",
