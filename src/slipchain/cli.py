@@ -150,6 +150,19 @@ def print_sweep_report(report: SweepReport, console: Console | None = None) -> N
         console.print(ft)
 
 
+def _sweep_dataset(store: Path, needs: set[str], what: str):
+    """The sweep Dataset of a store that sweeps at least ``needs`` (clear error and exit 2 otherwise)."""
+    from .store import Store
+
+    try:
+        ds = Store.open(store).dataset()
+    except SweepError as e:
+        _fail(str(e))
+    if not needs <= set(ds.dims):
+        _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; {what} needs {', '.join(sorted(needs))}")
+    return ds
+
+
 figure_app = typer.Typer(no_args_is_help=True, help="Draw the paper's figures from datasets (PNG and PDF).")
 app.add_typer(figure_app, name="figure")
 
@@ -178,15 +191,8 @@ def figure_fig6(
 ) -> None:
     """Fig. 6: mu_star versus theta, three eta_c, two v_d, N = 1001 stars, the dashed line."""
     from .figures import plot_fig6
-    from .store import Store
 
-    try:
-        ds = Store.open(store).dataset()
-    except SweepError as e:
-        _fail(str(e))
-    missing = {"theta", "eta_c", "v_d"} - set(ds.dims)
-    if missing:
-        _fail(f"store {str(store)!r} does not sweep {sorted(missing)}; fig6 needs theta, eta_c and v_d")
+    ds = _sweep_dataset(store, {"theta", "eta_c", "v_d"}, "fig6")
     for p in plot_fig6(ds, out):
         Console().print(f"wrote {p}")
 
@@ -200,20 +206,12 @@ def figure_tester(
     """Measured mu(v) with the model's mu_star(v_d) curves, one fitted scale factor per surface."""
     import pandas as pd
 
-    from .store import Store
     from .tester.plots import plot_model_vs_experiment
 
     table_path = runs / "runs.csv"
     if not table_path.exists():
         _fail(f"{table_path} does not exist; run `slipchain tester analyze ... --out {runs}` first")
-    sweep_ds = None
-    if store is not None:
-        try:
-            sweep_ds = Store.open(store).dataset()
-        except SweepError as e:
-            _fail(str(e))
-        if "v_d" not in sweep_ds.dims:
-            _fail(f"store {str(store)!r} sweeps {list(sweep_ds.dims)}; model curves need a v_d dimension")
+    sweep_ds = _sweep_dataset(store, {"v_d"}, "a model curve") if store is not None else None
     for p in plot_model_vs_experiment(pd.read_csv(table_path), sweep_ds, out or runs):
         Console().print(f"wrote {p}")
 
@@ -249,15 +247,8 @@ def figure_velocity(
 ) -> None:
     """mu_star versus v_d on a log axis, one curve per theta (the model's Figs. 2 and 3)."""
     from .figures import plot_velocity
-    from .store import Store
 
-    try:
-        ds = Store.open(store).dataset()
-    except SweepError as e:
-        _fail(str(e))
-    if "v_d" not in ds.dims:
-        _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; the velocity figure needs v_d")
-    for p in plot_velocity(ds, out):
+    for p in plot_velocity(_sweep_dataset(store, {"v_d"}, "the velocity figure"), out):
         Console().print(f"wrote {p}")
 
 
@@ -268,14 +259,8 @@ def figure_epsilon(
 ) -> None:
     """mu_star versus theta for each epsilon, and the drop from the smallest theta to the largest."""
     from .figures import epsilon_table, plot_epsilon
-    from .store import Store
 
-    try:
-        ds = Store.open(store).dataset()
-    except SweepError as e:
-        _fail(str(e))
-    if not {"epsilon", "theta"} <= set(ds.dims):
-        _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; the epsilon figure needs epsilon and theta")
+    ds = _sweep_dataset(store, {"epsilon", "theta"}, "the epsilon figure")
     for p in plot_epsilon(ds, out):
         Console().print(f"wrote {p}")
     avg = epsilon_table(ds)
@@ -297,14 +282,8 @@ def figure_dead_weight(
 ) -> None:
     """Applied mu_star against the measured steady velocity per theta (runaways at the right edge)."""
     from .figures import plot_dead_weight
-    from .store import Store
 
-    try:
-        ds = Store.open(store).dataset()
-    except SweepError as e:
-        _fail(str(e))
-    if "dead_weight" not in ds.dims or "velocity_status" not in ds:
-        _fail(f"store {str(store)!r} sweeps {list(ds.dims)}; the dead-weight figure needs dead_weight runs")
+    ds = _sweep_dataset(store, {"dead_weight"}, "the dead-weight figure")
     for p in plot_dead_weight(ds, out):
         Console().print(f"wrote {p}")
 

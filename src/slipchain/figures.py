@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from .config import Config, make_config
-from .reproduction import MAIN_N, base_config, dashed_line, fig6_table
+from .reproduction import base_config, dashed_line, drive_velocities, fig6_table, main_n, main_selection
 
 FIG5_ETA_FACTORS = (0.0, 1.0, 0.3, 0.1)  # eta_c / omega0, the curves of Fig. 5
 ETA_STYLE = {1.0: ("tab:blue", "o"), 0.3: ("tab:red", "D"), 0.1: ("black", "s")}  # Fig. 6 symbols
@@ -103,9 +103,9 @@ def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     cfg = base_config(ds)
     avg, sel = fig6_table(ds)
     v_values = sorted(avg["v_d"].values.tolist())
-    v_d1 = min(v_values, key=lambda v: abs(np.log(v / cfg.v0)))
+    v_d1, v_d2 = drive_velocities(cfg, v_values)
     ns = avg["N"].values.tolist() if "N" in avg.dims else [None]
-    n_main = MAIN_N if MAIN_N in ns else ns[0]
+    n_main = main_n(avg)
     fig, ax = plt.subplots(figsize=(8.2, 4.8))
     handles = []
     from matplotlib.lines import Line2D
@@ -125,7 +125,6 @@ def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
                             ms=11 if big else 6, mfc=color if filled else "white", mec=color, ls="-" if not big else "none",
                             lw=0.8, capsize=2, zorder=3 if big else 2)
     handles.append(Line2D([], [], color="0.3", marker="o", ls="none", label=f"filled: $v_{{d1}}$ = {v_d1:g} m/s"))
-    v_d2 = min(v_values)
     if v_d2 != v_d1:
         handles.append(Line2D([], [], color="0.3", marker="o", mfc="white", ls="none",
                               label=f"open: $v_{{d2}}$ = {v_d2:g} m/s"))
@@ -161,10 +160,10 @@ def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str 
     plt = _pyplot()
     paths: list[Path] = []
     cfg = base_config(stick_slip)
-    sel = {k: v for k, v in _extra_selection(stick_slip).items()}
+    sel = main_selection(stick_slip)
     avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
     if "N" in avg.dims:
-        avg = avg.sel(N=MAIN_N if MAIN_N in avg["N"].values else avg["N"].values[0])
+        avg = avg.sel(N=main_n(avg))
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     v_values = sorted(avg["v_d"].values.tolist(), reverse=True)
     for ec in sorted(avg["eta_c"].values.tolist(), reverse=True) if "eta_c" in avg.dims else [None]:
@@ -184,11 +183,10 @@ def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str 
     paths += _save(fig, out, "mechanism_stick_slip")
 
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
-    styles = {}
-    for a in analyses:
-        key = (a.attrs["v_d"], a.attrs["theta"])
-        styles[key] = ("-" if a.attrs["theta"] >= 0.5 else "--", "tab:red" if key[0] == max(k[0] for k in
-                        [(b.attrs["v_d"], 0) for b in analyses]) else "tab:blue")
+    v_top = max((a.attrs["v_d"] for a in analyses), default=0.0)
+    styles = {(a.attrs["v_d"], a.attrs["theta"]): ("-" if a.attrs["theta"] >= 0.5 else "--",
+                                                    "tab:red" if a.attrs["v_d"] == v_top else "tab:blue")
+              for a in analyses}
     for a in analyses:
         ls, color = styles[(a.attrs["v_d"], a.attrs["theta"])]
         label = rf"$v_d$ = {a.attrs['v_d']:g}, $\theta$ = {a.attrs['theta']:.2g}"
@@ -250,15 +248,9 @@ def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str 
     return paths
 
 
-def _extra_selection(ds: xr.Dataset) -> dict:
-    from .reproduction import main_selection
-
-    return main_selection(ds)
-
-
 def plot_velocity(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     """mu_star versus v_d (log axis), one curve per theta: the model's Figs. 2 and 3."""
-    from .reproduction import main_selection, seed_average
+    from .reproduction import seed_average
 
     plt = _pyplot()
     sel = main_selection(ds)

@@ -220,7 +220,7 @@ MECHANISM = "mechanism"
 def mechanism_members(store) -> list:
     """The members analysed in detail: lowest and highest theta at each v_d (smallest eta_c, first
     seed, N = 301 or the first N, other dimensions at their most populated value)."""
-    from .reproduction import MAIN_N, main_selection
+    from .reproduction import main_n, main_selection
 
     ds = store.dataset()
     sel = main_selection(ds)
@@ -230,7 +230,7 @@ def mechanism_members(store) -> list:
     if "seed" in ds.dims:
         pick["seed"] = int(ds["seed"].min())
     if "N" in ds.dims:
-        pick["N"] = MAIN_N if MAIN_N in ds["N"].values else int(ds["N"].values[0])
+        pick["N"] = main_n(ds)
     out = []
     for vd in ds["v_d"].values.tolist():
         thetas = ds["theta"].values.tolist()
@@ -265,12 +265,12 @@ def median_frequency(freq: np.ndarray, psd: np.ndarray) -> float:
 
 def mechanism_summary(stick_slip: xr.Dataset, analyses: list[xr.Dataset]) -> str:
     """Markdown: what the mechanism figures show, in numbers."""
-    from .reproduction import main_selection, seed_average
+    from .reproduction import main_n, main_selection, seed_average
 
     sel = main_selection(stick_slip)
     avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
     if "N" in avg.dims:
-        avg = avg.sel(N=301 if 301 in avg["N"].values else avg["N"].values[0])
+        avg = avg.sel(N=main_n(avg))
     lines = ["# The mechanism: stick-slip, slip events, spectra", "",
              f"A contact stick-slips when it spends at least {STICK_FRACTION:.0%} of the steady time at |u| < "
              f"{SLOW_FRACTION:g} v_d. Seed means ± error (seeds and binomial).", "",

@@ -49,6 +49,20 @@ def main_selection(ds: xr.Dataset) -> dict[str, Any]:
     return sel
 
 
+def main_n(ds: xr.Dataset) -> int | None:
+    """The chain length of the main curves: N = 301 if swept, else the first N (None if N is not swept)."""
+    if "N" not in ds.dims:
+        return None
+    values = ds["N"].values.tolist()
+    return MAIN_N if MAIN_N in values else int(values[0])
+
+
+def drive_velocities(cfg: Config, v_values) -> tuple[float, float]:
+    """(v_d1, v_d2): the swept drive velocity closest to v0 (log scale), and the smallest."""
+    values = sorted(float(v) for v in v_values)
+    return min(values, key=lambda v: abs(math.log(v / cfg.v0))), values[0]
+
+
 def seed_average(ds: xr.Dataset) -> xr.Dataset:
     """mu_star averaged over ``seed`` (completed members only), error from seeds and time."""
     ok = ds["status"] == "completed"
@@ -98,11 +112,9 @@ def evaluate(ds: xr.Dataset) -> list[Claim]:
     """The paper's Fig. 6 claims, measured on the sweep Dataset."""
     cfg = base_config(ds)
     avg, _ = fig6_table(ds)
-    n_main = MAIN_N if "N" in avg.dims and MAIN_N in avg["N"].values else (avg["N"].values[0] if "N" in avg.dims else None)
+    n_main = main_n(avg)
     main = avg.sel(N=n_main) if n_main is not None else avg
-    v_values = sorted(main["v_d"].values.tolist())
-    v_d1 = min(v_values, key=lambda v: abs(math.log(v / cfg.v0)))
-    v_d2 = min(v_values)
+    v_d1, v_d2 = drive_velocities(cfg, main["v_d"].values)
     eta_values = sorted(main["eta_c"].values.tolist())
     claims: list[Claim] = []
 
@@ -305,5 +317,5 @@ def _table(ds: xr.Dataset) -> list[str]:
     return lines
 
 
-__all__ = ["Claim", "FIG6_DIMS", "base_config", "convergence", "dashed_line", "evaluate", "fig6_table",
-           "main_selection", "report_markdown", "seed_average"]
+__all__ = ["Claim", "FIG6_DIMS", "base_config", "convergence", "dashed_line", "drive_velocities", "evaluate",
+           "fig6_table", "main_n", "main_selection", "report_markdown", "seed_average"]

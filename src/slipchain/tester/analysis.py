@@ -79,9 +79,14 @@ def analyze_runs(runs: list[Run]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=RUNS_COLUMNS)
 
 
+def pressure_group(p: float) -> float:
+    """Pressures equal to 3 significant digits form one group."""
+    return float(f"{p:.3g}")
+
+
 def _groups(table: pd.DataFrame) -> pd.DataFrame:
     t = table[table["status"].isin([OK, RUNAWAY])].copy()
-    t["pressure_group_Pa"] = t["pressure_Pa"].map(lambda p: float(f"{p:.3g}"))
+    t["pressure_group_Pa"] = t["pressure_Pa"].map(pressure_group)
     return t
 
 
@@ -213,5 +218,5 @@ def summary_markdown(table: pd.DataFrame, peaks: pd.DataFrame, tests: list[LoadT
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["BandTest", "LoadTest", "NO_STEADY", "RUNS_COLUMNS", "analyze_runs", "load_tests", "maxima",
+__all__ = ["pressure_group", "BandTest", "LoadTest", "NO_STEADY", "RUNS_COLUMNS", "analyze_runs", "load_tests", "maxima",
            "mu_with_uncertainty", "summary_markdown"]

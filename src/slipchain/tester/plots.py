@@ -11,7 +11,7 @@ import pandas as pd
 import xarray as xr
 
 from ..figures import _pyplot, _save
-from .analysis import GROUP, OK, RUNAWAY
+from .analysis import GROUP, OK, RUNAWAY, pressure_group
 
 
 def _stem(prefix: str, key: tuple) -> str:
@@ -24,7 +24,7 @@ def plot_mu_v(table: pd.DataFrame, peaks: pd.DataFrame, out: str | os.PathLike) 
     plt = _pyplot()
     paths: list[Path] = []
     usable = table[table["status"].isin([OK, RUNAWAY])].copy()
-    usable["p_group"] = usable["pressure_Pa"].map(lambda p: float(f"{p:.3g}"))
+    usable["p_group"] = usable["pressure_Pa"].map(pressure_group)
     for key, g in usable.groupby(GROUP, sort=True):
         fig, ax = plt.subplots(figsize=(6.2, 4.4))
         pressures = sorted(g["p_group"].unique())
@@ -94,7 +94,7 @@ def plot_model_vs_experiment(table: pd.DataFrame, sweep: xr.Dataset | None, out:
     """
     plt = _pyplot()
     ok = table[table["status"] == OK].copy()
-    ok["p_group"] = ok["pressure_Pa"].map(lambda p: float(f"{p:.3g}"))
+    ok["p_group"] = ok["pressure_Pa"].map(pressure_group)
     curves = model_curves(sweep) if sweep is not None else {}
     paths: list[Path] = []
     for surface, g in ok.groupby("surface", sort=True):
