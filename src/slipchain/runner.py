@@ -41,16 +41,9 @@ ERROR = "error"
 GPU_BATCH = 256  # members per task with the GPU backend
 
 
-def run_member(config: Config) -> xr.Dataset:
-    """One sweep member (executed on a worker): build the system, simulate, return the Dataset."""
-    from .simulation import simulate
-    from .system import build_system
-
-    return simulate(build_system(config), progress=False)
-
-
 def run_members(configs: list[Config]) -> list[xr.Dataset]:
-    """Several members in one batch (executed on a worker): one kernel launch advances all of them."""
+    """Sweep members (executed on a worker): build the systems, simulate them as one batch (one
+    kernel launch advances all of them; a batch of one is a plain run), return the Datasets."""
     from .simulation import simulate_batch
     from .system import build_system
 
@@ -194,19 +187,14 @@ def _execute(client, st: Store, groups: list[list[Member]], report: SweepReport,
 
     futures = {}
     for g in groups:
-        cost = max(expected_cost(m) for m in g)
-        if len(g) == 1:
-            fut = client.submit(run_member, g[0].config, key=f"slipchain-member-{g[0].id}", priority=cost, pure=False)
-        else:
-            fut = client.submit(run_members, [m.config for m in g], key=f"slipchain-batch-{g[0].id}-{len(g)}",
-                                priority=cost, pure=False)
+        fut = client.submit(run_members, [m.config for m in g], key=f"slipchain-{g[0].id}-{len(g)}",
+                            priority=max(expected_cost(m) for m in g), pure=False)
         futures[fut] = g
     try:
         for fut in as_completed(list(futures)):
             g = futures.pop(fut)
             try:
-                result = fut.result()
-                results = [result] if len(g) == 1 else result
+                results = fut.result()
             except Exception as exc:  # the task raised, or its workers kept dying (KilledWorker)
                 results = [error_dataset(m, exc) for m in g]
             for m, ds in zip(g, results):
@@ -253,4 +241,4 @@ class _SweepProgress:
 
 
 __all__ = ["GPU_BATCH", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
-           "run_member", "run_sweep"]
+           "run_sweep"]
