@@ -1,4 +1,9 @@
-"""Run a sweep on Dask: every member a task, every finished member written to the store at once.
+"""Run a sweep on Dask: every member (or batch of members) a task, every finished member written
+to the store at once.
+
+On the CPU each task is one member; with ``backend = 'gpu'`` a task is a batch of up to 256
+members of equal N, dt and output interval, advanced together by one kernel launch
+(:func:`slipchain.simulation.simulate_batch`); its members are written one by one when it returns.
 
 The driver (this process) submits the members that the store does not hold yet, in order of
 decreasing expected cost (large ``N*theta`` first, so the long runs do not end up alone at the
