@@ -12,7 +12,7 @@ import pytest
 from slipchain.tester import TesterDataError, analyze
 from slipchain.tester.analysis import load_tests, maxima, mu_with_uncertainty
 from slipchain.tester.plots import fit_scale
-from slipchain.tester.synth import SynthLaw, SynthSetup, synthesize, write_synthetic
+from slipchain.tester.synth import SynthLaw, SynthSetup, synthesize
 from slipchain.tester.velocity import NO_STEADY, OK, RUNAWAY, steady_velocity
 
 

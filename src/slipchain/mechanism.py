@@ -31,7 +31,6 @@ shorter), 50 % overlap, mean removed per segment. The block-velocity PSD is the 
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 

@@ -25,7 +25,6 @@ results travel back to the driver, which alone writes the store.
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import sys
