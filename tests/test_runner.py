@@ -95,29 +95,38 @@ def test_worker_killed_mid_task_is_retried(tmp_path, client):
     client.wait_for_workers(2, timeout=60)  # the nanny restarted the killed worker
 
 
-def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path):
+def _interrupt_sweep(tmp_path, sig, after_members):
+    """Start `slipchain sweep` of 8 one-second members on a 2-process local cluster, send ``sig`` to
+    the driver once ``after_members`` are stored, then kill what is left of its process group.
+    Returns (command, store, return code, stdout)."""
     definition = tmp_path / "sweep.toml"
     definition.write_text(
-        'name = "sigkill"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
+        'name = "interrupt"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
         f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(8)))}]\n")
     store = tmp_path / "s"
     cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store), "--workers", "2",
            "--no-progress"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     members = store / "members"
     try:
         t_end = time.time() + 120
-        while time.time() < t_end and len(list(members.glob("*.nc")) if members.exists() else []) < 2:
+        while time.time() < t_end and len(list(members.glob("*.nc")) if members.exists() else []) < after_members:
             assert proc.poll() is None, proc.communicate()
             time.sleep(0.05)
-        os.kill(proc.pid, signal.SIGKILL)
-        proc.wait(timeout=30)
+        os.kill(proc.pid, sig)
+        out, _ = proc.communicate(timeout=120)
     finally:
         try:
             os.killpg(proc.pid, signal.SIGKILL)  # the orphaned local-cluster processes
         except ProcessLookupError:
             pass
-    assert proc.returncode == -signal.SIGKILL
+    return cmd, store, proc.returncode, out
+
+
+def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path):
+    cmd, store, code, _ = _interrupt_sweep(tmp_path, signal.SIGKILL, 2)
+    members = store / "members"
+    assert code == -signal.SIGKILL
     survivors = sorted(p.stem for p in members.glob("*.nc"))
     assert 2 <= len(survivors) < 8
     for mid in survivors:  # every member file that exists is complete and readable
@@ -153,28 +162,9 @@ def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_pa
 
 
 def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
-    definition = tmp_path / "sweep.toml"
-    definition.write_text(
-        'name = "sigint"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
-        f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(8)))}]\n")
-    store = tmp_path / "s"
-    proc = subprocess.Popen([sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store),
-                             "--workers", "2", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+    _, store, code, out = _interrupt_sweep(tmp_path, signal.SIGINT, 1)
     members = store / "members"
-    try:
-        t_end = time.time() + 120
-        while time.time() < t_end and len(list(members.glob("*.nc")) if members.exists() else []) < 1:
-            assert proc.poll() is None, proc.communicate()
-            time.sleep(0.05)
-        os.kill(proc.pid, signal.SIGINT)
-        out, err = proc.communicate(timeout=120)
-    finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    assert proc.returncode == 130, err
+    assert code == 130, out
     assert "(interrupted)" in out
     done = list(members.glob("*.nc"))
     assert 1 <= len(done) < 8 and all(read_dataset(p).attrs["status"] == "completed" for p in done)

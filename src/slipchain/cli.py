@@ -150,6 +150,11 @@ def print_sweep_report(report: SweepReport, console: Console | None = None) -> N
         console.print(ft)
 
 
+def _wrote(paths) -> None:
+    for p in paths:
+        Console().print(f"wrote {p}")
+
+
 def _sweep_dataset(store: Path, needs: set[str], what: str):
     """The sweep Dataset of a store that sweeps at least ``needs`` (clear error and exit 2 otherwise)."""
     from .store import Store
@@ -180,8 +185,7 @@ def figure_fig5(
         cfg = load_config(config)
     except ConfigError as e:
         _fail(str(e))
-    for p in plot_fig5(contact_law_dataset(cfg, seed=seed), out):
-        Console().print(f"wrote {p}")
+    _wrote(plot_fig5(contact_law_dataset(cfg, seed=seed), out))
 
 
 @figure_app.command("fig6")
@@ -193,8 +197,7 @@ def figure_fig6(
     from .figures import plot_fig6
 
     ds = _sweep_dataset(store, {"theta", "eta_c", "v_d"}, "fig6")
-    for p in plot_fig6(ds, out):
-        Console().print(f"wrote {p}")
+    _wrote(plot_fig6(ds, out))
 
 
 @figure_app.command("tester")
@@ -212,8 +215,7 @@ def figure_tester(
     if not table_path.exists():
         _fail(f"{table_path} does not exist; run `slipchain tester analyze ... --out {runs}` first")
     sweep_ds = _sweep_dataset(store, {"v_d"}, "a model curve") if store is not None else None
-    for p in plot_model_vs_experiment(pd.read_csv(table_path), sweep_ds, out or runs):
-        Console().print(f"wrote {p}")
+    _wrote(plot_model_vs_experiment(pd.read_csv(table_path), sweep_ds, out or runs))
 
 
 @figure_app.command("mechanism")
@@ -236,8 +238,7 @@ def figure_mechanism(
     report = out / "mechanism.md"
     report.write_text(mechanism_summary(ss, analyses) + "\n" + "\n".join(f"![{p.name}]({p.name})" for p in paths
                                                                          if p.suffix == ".png") + "\n")
-    for p in [*paths, report]:
-        Console().print(f"wrote {p}")
+    _wrote([*paths, report])
 
 
 @figure_app.command("velocity")
@@ -248,8 +249,7 @@ def figure_velocity(
     """mu_star versus v_d on a log axis, one curve per theta (the model's Figs. 2 and 3)."""
     from .figures import plot_velocity
 
-    for p in plot_velocity(_sweep_dataset(store, {"v_d"}, "the velocity figure"), out):
-        Console().print(f"wrote {p}")
+    _wrote(plot_velocity(_sweep_dataset(store, {"v_d"}, "the velocity figure"), out))
 
 
 @figure_app.command("epsilon")
@@ -261,8 +261,7 @@ def figure_epsilon(
     from .figures import epsilon_table, plot_epsilon
 
     ds = _sweep_dataset(store, {"epsilon", "theta"}, "the epsilon figure")
-    for p in plot_epsilon(ds, out):
-        Console().print(f"wrote {p}")
+    _wrote(plot_epsilon(ds, out))
     avg = epsilon_table(ds)
     for eps in avg["epsilon"].values:
         cur = avg.sel(epsilon=eps).dropna("theta", subset=["mu"])
@@ -284,8 +283,7 @@ def figure_dead_weight(
     from .figures import plot_dead_weight
 
     ds = _sweep_dataset(store, {"dead_weight"}, "the dead-weight figure")
-    for p in plot_dead_weight(ds, out):
-        Console().print(f"wrote {p}")
+    _wrote(plot_dead_weight(ds, out))
 
 
 @app.command()
