@@ -22,7 +22,7 @@ from rich.console import Console
 from rich.table import Table
 
 from .config import ConfigError, load_config
-from .io import write_dataset
+from .io import write_dataset, write_text_atomic
 from .runner import SweepReport, run_sweep
 from .simulation import COMPLETED, DIVERGED, INTERRUPTED, simulate, summary
 from .sweep import PRESETS, SweepError, load_sweep_definition
@@ -235,9 +235,8 @@ def figure_mechanism(
         _fail(str(e))
     ss = stick_slip_dataset(st)
     paths = plot_mechanism(ss, analyses, out)
-    report = out / "mechanism.md"
-    report.write_text(mechanism_summary(ss, analyses) + "\n" + "\n".join(f"![{p.name}]({p.name})" for p in paths
-                                                                         if p.suffix == ".png") + "\n")
+    report = write_text_atomic(out / "mechanism.md", mechanism_summary(ss, analyses) + "\n" + "\n".join(
+        f"![{p.name}]({p.name})" for p in paths if p.suffix == ".png") + "\n")
     _wrote([*paths, report])
 
 

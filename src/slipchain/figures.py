@@ -19,6 +19,7 @@ import numpy as np
 import xarray as xr
 
 from .config import Config, make_config
+from .io import atomic_write
 from .reproduction import base_config, dashed_line, drive_velocities, fig6_table, main_n, main_selection
 
 FIG5_ETA_FACTORS = (0.0, 1.0, 0.3, 0.1)  # eta_c / omega0, the curves of Fig. 5
@@ -65,9 +66,8 @@ def _save(fig, out: str | os.PathLike, stem: str) -> list[Path]:
     paths = []
     for ext in ("png", "pdf"):
         p = out / f"{stem}.{ext}"
-        tmp = p.with_name(f".{p.name}.tmp")
-        fig.savefig(tmp, dpi=150, bbox_inches="tight", format=ext)
-        os.replace(tmp, p)
+        with atomic_write(p) as tmp:
+            fig.savefig(tmp, dpi=150, bbox_inches="tight", format=ext)
         paths.append(p)
     _pyplot().close(fig)
     return paths

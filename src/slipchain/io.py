@@ -1,32 +1,48 @@
-"""Writing and reading result Datasets: NetCDF via h5netcdf, written atomically.
+"""Writing and reading result files atomically: Datasets (NetCDF via h5netcdf), text, figures.
 
 A file is written to a temporary name beside its destination and moved into place with
-``os.replace``, so an interrupted write never leaves a half-written result under the final
-name, and never replaces a finished one with a broken one.
+``os.replace`` (:func:`atomic_write`), so an interrupted write never leaves a half-written
+result under the final name, and never replaces a finished one with a broken one.
 """
 
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Iterator
 
 import xarray as xr
 
 ENGINE = "h5netcdf"
 
 
-def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write ``ds`` to ``path`` (NetCDF4) atomically; returns the path."""
+@contextmanager
+def atomic_write(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; if the block succeeds it is moved onto ``path``,
+    otherwise removed. The parent directory is created."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        ds.to_netcdf(tmp, engine=ENGINE)
+        yield tmp
         os.replace(tmp, path)
     finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+        tmp.unlink(missing_ok=True)
+
+
+def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically; returns the path."""
+    with atomic_write(path) as tmp:
+        tmp.write_text(text)
+    return Path(path)
+
+
+def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write ``ds`` to ``path`` (NetCDF4) atomically; returns the path."""
+    with atomic_write(path) as tmp:
+        ds.to_netcdf(tmp, engine=ENGINE)
+    return Path(path)
 
 
 def read_dataset(path: str | os.PathLike) -> xr.Dataset:

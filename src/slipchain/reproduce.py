@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .figures import contact_law_dataset, plot_fig5, plot_fig6
+from .io import write_text_atomic
 from .reproduction import base_config, convergence, evaluate, report_markdown
 from .runner import SweepReport, run_sweep
 from .store import Store
@@ -44,27 +45,17 @@ def reproduce(preset: str = "quick", store: str | os.PathLike | None = None, out
     return Reproduction(rep, *write_outputs(st, out_path, command=command or f"slipchain reproduce --preset {preset}"))
 
 
-def sweep_wall_time(st: Store) -> tuple[float, int]:
-    """Wall time of the invocations that ran members (from the store's log), and their number."""
-    runs = [r for r in st.invocations() if r.get("ran")]
-    return sum(r.get("wall_time_s", 0.0) for r in runs), len(runs)
-
-
 def write_outputs(st: Store, out: Path, *, command: str) -> tuple[Path, list[Path]]:
     """Figures 5 and 6 and report.md from what the store holds (failed members are listed)."""
     ds = st.dataset()
-    wall, n_inv = sweep_wall_time(st)
-    ds.attrs["invocations"] = n_inv
-    ds.attrs["workers"] = ", ".join(sorted({str(r.get("n_workers") or r.get("scheduler"))
-                                            for r in st.invocations() if r.get("ran")}))
+    runs = [r for r in st.invocations() if r.get("ran")]  # the invocations that ran members
+    wall = sum(r.get("wall_time_s", 0.0) for r in runs)
+    ds.attrs["invocations"] = len(runs)
+    ds.attrs["workers"] = ", ".join(sorted({str(r.get("n_workers") or r.get("scheduler")) for r in runs}))
     figures = plot_fig5(contact_law_dataset(base_config(ds)), out) + plot_fig6(ds, out)
     text = report_markdown(ds, evaluate(ds), convergence(ds), command=command, wall_time_s=wall or None,
                            figures=[p.name for p in figures if p.suffix == ".png"])
-    report = out / "report.md"
-    tmp = report.with_name(".report.md.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, report)
-    return report, figures
+    return write_text_atomic(out / "report.md", text), figures
 
 
 __all__ = ["Reproduction", "default_paths", "reproduce", "write_outputs"]

@@ -89,7 +89,6 @@ class _Row:
     """The run control of one realisation of a batch."""
 
     system: System
-    state0: State
     e0: float
     norm: float
     limit: int
@@ -130,7 +129,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     for s, st in zip(systems, states0):
         c = s.config
         dead_weight = c.dead_weight is not None  # fixed length (t_total, else t_max); velocity measured after
-        rows.append(_Row(system=s, state0=st, e0=stored_energy(s, st), norm=mu_star_norm(s),
+        rows.append(_Row(system=s, e0=stored_energy(s, st), norm=mu_star_norm(s),
                          limit=max(1, int(round((c.t_total if c.t_total is not None else c.t_max) / interval))),
                          auto=c.t_total is None and not dead_weight, f_b=dead_weight_force(s) if dead_weight else 0.0,
                          x0_mean=float(np.mean(st.x)), sem_reached=not (c.t_total is None and not dead_weight)))

@@ -32,7 +32,7 @@ import h5netcdf
 import numpy as np
 import xarray as xr
 
-from .io import read_dataset, write_dataset
+from .io import read_dataset, write_dataset, write_text_atomic
 from .sweep import Member, SweepDefinition, SweepError, load_sweep_definition
 
 DEFINITION = "sweep.toml"
@@ -92,7 +92,7 @@ class Store:
                              "give a new or empty directory as --store")
         (path / MEMBERS).mkdir(parents=True, exist_ok=True)
         (path / FAILED).mkdir(exist_ok=True)
-        _write_text_atomic(definition, f"# slipchain sweep store; digest {sweep.digest}\n" + sweep.to_toml())
+        write_text_atomic(definition, f"# slipchain sweep store; digest {sweep.digest}\n" + sweep.to_toml())
         return cls(path, sweep)
 
     # --- members -------------------------------------------------------------------------
@@ -207,7 +207,7 @@ class Store:
             w.writerow([m.id, *(v for _, v in m.point), a.get("status", ""), a.get("mu_star", ""),
                         a.get("mu_star_sem", ""), a.get("t_total", ""), a.get("wall_time_s", ""), a.get("message", "")])
         path = self.path / INDEX
-        _write_text_atomic(path, buf.getvalue())
+        write_text_atomic(path, buf.getvalue())
         return path
 
     def log_invocation(self, record: dict[str, Any]) -> None:
@@ -247,15 +247,6 @@ def _plain(v: Any) -> Any:
     if isinstance(v, np.generic):
         return v.item()
     return v
-
-
-def _write_text_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def _difference(a: SweepDefinition, b: SweepDefinition) -> str:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..io import atomic_write, write_text_atomic
 from .analysis import LoadTest, analyze_runs, load_tests, maxima, summary_markdown
 from .io import TesterDataError, read_runs, read_traces
 from .plots import plot_mu_v
@@ -28,9 +29,8 @@ class Analysis:
 
 
 def _write_csv(df: pd.DataFrame, path: Path) -> Path:
-    tmp = path.with_name(f".{path.name}.tmp")
-    df.to_csv(tmp, index=False)
-    os.replace(tmp, path)
+    with atomic_write(path) as tmp:
+        df.to_csv(tmp, index=False)
     return path
 
 
@@ -46,8 +46,7 @@ def analyze(runs_csv: str | os.PathLike, traces_csv: str | os.PathLike | None, o
     figures = plot_mu_v(table, peaks, out)
     files = {"runs": _write_csv(table, out / "runs.csv"), "maxima": _write_csv(peaks, out / "maxima.csv")}
     text = summary_markdown(table, peaks, tests, [p.name for p in figures if p.suffix == ".png"])
-    files["summary"] = out / "summary.md"
-    files["summary"].write_text(text)
+    files["summary"] = write_text_atomic(out / "summary.md", text)
     for p in figures:
         files[p.name] = p
     return Analysis(table, peaks, tests, files)
