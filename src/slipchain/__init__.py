@@ -1,31 +1,40 @@
 """slipchain: the multi-contact friction model of Braun, Steenwyk, Warhadpande and Persson,
 "On the dependency of friction on load: Theory and experiment", EPL 113, 56002 (2016).
 
-Data flow: config -> system -> simulation (compiled kernel in chunks) -> observables ->
-result Dataset -> store -> plots.
+Data flow, one way: config -> system (``model``) -> simulation (``engine``: compiled kernel in
+chunks) -> observables and the run Dataset (``results``) -> store (``sweeps``) -> analysis ->
+plots; ``workflows`` chain them into jobs and ``cli`` exposes them. See the README's
+architecture section.
 """
 
+from . import _moved
 from ._version import __version__
-from .config import Config, ConfigError, load_config, make_config
-from .contact_law import ContactLaw
-from .io import read_dataset, write_dataset
-from .simulation import run, simulate, summary
-from .system import State, System, build_system, initial_state
+from .engine import BackendName, run, simulate, simulate_batch
+from .model import Config, ConfigError, ContactLaw, State, System, build_system, initial_state, load_config, make_config
+from .results import Status, read_dataset, summary, write_dataset
+from .sweeps import open_sweep, run_sweep
+
+_moved.install()
 
 __all__ = [
+    "BackendName",
     "Config",
     "ConfigError",
     "ContactLaw",
     "State",
+    "Status",
     "System",
     "__version__",
     "build_system",
     "initial_state",
     "load_config",
     "make_config",
+    "open_sweep",
     "read_dataset",
     "run",
+    "run_sweep",
     "simulate",
+    "simulate_batch",
     "summary",
     "write_dataset",
 ]

@@ -1,55 +1,12 @@
-"""The paper's friction-tester experiment (Figs. 1 to 3): from raw distance traces to mu(v) per pressure.
+"""The paper's friction-tester experiment (Figs. 1 to 3) as data: inputs, mu and p0 with uncertainties, maxima, the load test, synthetic data.
 
-``analyze(runs_csv, traces_csv, out)``: read and check the inputs (:mod:`.io`), steady velocity
-per trace (:mod:`.velocity`), mu and p0 with uncertainties, first maxima and the load test
-(:mod:`.analysis`), figures (:mod:`.plots`); writes ``runs.csv``, ``maxima.csv``, ``summary.md``
-and the figures. ``synth``: a simulated dead-weight tester for examples and tests (:mod:`.synth`).
+:mod:`.inputs` reads and checks ``runs.csv`` and ``traces.csv``; the steady velocity of a trace is
+:func:`slipchain.results.velocity.steady_velocity` (the same algorithm measures the model's
+dead-weight runs); :mod:`.analysis` gives mu, p0, the first maxima and the load test; :mod:`.synth`
+simulates a dead-weight tester for examples and tests. The whole analysis with its files and
+figures is :func:`slipchain.workflows.tester.analyze`.
 """
 
-from __future__ import annotations
+from .inputs import Run, TesterDataError, read_runs, read_traces
 
-import os
-from dataclasses import dataclass
-from pathlib import Path
-
-import pandas as pd
-
-from ..io import atomic_write, write_text_atomic
-from .analysis import LoadTest, analyze_runs, load_tests, maxima, summary_markdown
-from .io import TesterDataError, read_runs, read_traces
-from .plots import plot_mu_v
-
-
-@dataclass
-class Analysis:
-    runs: pd.DataFrame
-    maxima: pd.DataFrame
-    tests: list[LoadTest]
-    files: dict[str, Path]
-
-
-def _write_csv(df: pd.DataFrame, path: Path) -> Path:
-    with atomic_write(path) as tmp:
-        df.to_csv(tmp, index=False)
-    return path
-
-
-def analyze(runs_csv: str | os.PathLike, traces_csv: str | os.PathLike | None, out: str | os.PathLike) -> Analysis:
-    """The whole analysis; raises TesterDataError only for input that cannot be read at all."""
-    runs = read_runs(runs_csv)
-    orphans = read_traces(traces_csv, runs) if traces_csv is not None else []
-    table = analyze_runs(runs + orphans)
-    peaks = maxima(table)
-    tests = load_tests(table, peaks)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    figures = plot_mu_v(table, peaks, out)
-    files = {"runs": _write_csv(table, out / "runs.csv"), "maxima": _write_csv(peaks, out / "maxima.csv")}
-    text = summary_markdown(table, peaks, tests, [p.name for p in figures if p.suffix == ".png"])
-    files["summary"] = write_text_atomic(out / "summary.md", text)
-    for p in figures:
-        files[p.name] = p
-    return Analysis(table, peaks, tests, files)
-
-
-__all__ = ["Analysis", "TesterDataError", "analyze"]
+__all__ = ["Run", "TesterDataError", "read_runs", "read_traces"]

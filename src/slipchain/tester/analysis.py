@@ -34,8 +34,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from .io import Run
-from .velocity import NO_STEADY, OK, RUNAWAY, steady_velocity
+from .inputs import Run
+from ..results.velocity import NO_STEADY, OK, RUNAWAY, steady_velocity
 
 G = 9.81
 NEAR_DECADES = 0.5

@@ -1,0 +1,44 @@
+"""The command line: one module per command group; each command parses, calls one library function, prints.
+
+* ``slipchain run [CONFIG.toml] [--set name=value ...] [--out FILE.nc] [--json] [--backend cpu|gpu|auto]``: one run.
+* ``slipchain sweep SWEEP.toml --store PATH [--scheduler ADDRESS] [--workers N] [--backend ...]``: a sweep on Dask.
+* ``slipchain reproduce [--preset quick|paper] [--store PATH] [--out DIR]``: the main job.
+* ``slipchain mechanism --store PATH``; ``slipchain figure fig5|fig6|mechanism|velocity|epsilon|dead-weight|tester``;
+  ``slipchain tester analyze|synth``.
+
+Exit codes: 0 completed; 1 diverged or some members failed (results are still written, with
+their messages); 2 rejected input (nothing written); 130 interrupted (finished work is kept).
+"""
+
+from __future__ import annotations
+
+import typer
+
+from .common import EXIT_CODES
+from .figure import figure_app
+from .run import run
+from .sweep import mechanism, print_sweep_report, reproduce, sweep
+from .tester import tester_app
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="The two-chain multi-contact friction model of Braun et al., EPL 113, 56002 (2016).")
+
+
+@app.callback()
+def _main() -> None:
+    """slipchain: simulate, sweep and plot the multi-contact friction model."""
+
+
+app.command()(run)
+app.command()(sweep)
+app.add_typer(figure_app, name="figure")
+app.command()(mechanism)
+app.add_typer(tester_app, name="tester")
+app.command()(reproduce)
+
+
+def main() -> None:  # pragma: no cover - console entry point
+    app()
+
+
+__all__ = ["EXIT_CODES", "app", "main", "print_sweep_report"]

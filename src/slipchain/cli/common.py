@@ -1,0 +1,40 @@
+"""What the commands share: exit codes, the error console, options and their choices."""
+
+from __future__ import annotations
+
+from typing import Annotated, NoReturn, Optional
+
+import typer
+from rich.console import Console
+
+from ..engine.backends import BackendName
+from ..results.schema import Status
+from ..sweeps.executor import SweepReport
+
+err = Console(stderr=True)
+out = Console()
+
+# Exit codes: 0 completed; 1 diverged or some members failed (results are still written, with
+# their messages); 2 rejected input (nothing written); 130 interrupted (finished work is kept).
+EXIT_CODES = {Status.COMPLETED: 0, Status.DIVERGED: 1, Status.INTERRUPTED: 130}
+
+
+def fail(message: str) -> NoReturn:
+    """Rejected input: the message on stderr, exit code 2."""
+    err.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
+    raise typer.Exit(2)
+
+
+def wrote(paths) -> None:
+    for p in paths:
+        out.print(f"wrote {p}")
+
+
+def sweep_exit(report: SweepReport) -> int:
+    return 130 if report.interrupted else (0 if report.ok else 1)
+
+
+WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="Local cluster size (default: one process per core).")]
+SchedulerOpt = Annotated[Optional[str], typer.Option("--scheduler", help="Address of an existing Dask scheduler, e.g. tcp://host:8786.")]
+BackendOpt = Annotated[BackendName, typer.Option("--backend", help="Where to compute: cpu, gpu (numba.cuda) or auto (the GPU if one is found).")]
+ProgressOpt = Annotated[Optional[bool], typer.Option("--progress/--no-progress", help="Progress bar (default: on a terminal).")]

@@ -1,0 +1,107 @@
+"""``slipchain figure ...``: the paper's and the mechanism's figures from stores and tables (PNG and PDF)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from ..model.config import ConfigError
+from ..sweeps.definition import SweepError
+from ..workflows import figures
+from ..workflows.mechanism import mechanism_figures
+from .common import fail, out, wrote
+
+figure_app = typer.Typer(no_args_is_help=True, help="Draw the paper's figures from datasets (PNG and PDF).")
+
+OutOpt = Annotated[Path, typer.Option("--out", help="Output directory.")]
+
+
+@figure_app.command("fig5")
+def fig5(
+    out_dir: OutOpt,
+    config: Annotated[Optional[Path], typer.Option("--config", help="Base config TOML (default: the paper's).")] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Disorder of the N = 1001 contact average.")] = 0,
+) -> None:
+    """Fig. 5: eq. (1) for eta_c = 0, omega0, 0.3 omega0, 0.1 omega0 and the contact average (N = 1001, theta = 1)."""
+    try:
+        wrote(figures.fig5(out_dir, config, seed))
+    except ConfigError as e:
+        fail(str(e))
+
+
+@figure_app.command("fig6")
+def fig6(
+    store: Annotated[Path, typer.Option("--store", help="Store of a Fig. 6 sweep (theta, eta_c, v_d; N, seed optional).")],
+    out_dir: OutOpt,
+) -> None:
+    """Fig. 6: mu_star versus theta, three eta_c, two v_d, N = 1001 stars, the dashed line."""
+    try:
+        wrote(figures.fig6(store, out_dir))
+    except SweepError as e:
+        fail(str(e))
+
+
+@figure_app.command("tester")
+def tester(
+    runs: Annotated[Path, typer.Option("--runs", help="Output directory of `slipchain tester analyze` (its runs.csv).")],
+    store: Annotated[Optional[Path], typer.Option("--store", help="Sweep store with a v_d dimension (model curves).")] = None,
+    out_dir: Annotated[Optional[Path], typer.Option("--out", help="Output directory (default: the --runs directory).")] = None,
+) -> None:
+    """Measured mu(v) with the model's mu_star(v_d) curves, one fitted scale factor per surface."""
+    try:
+        wrote(figures.tester(runs, store, out_dir))
+    except (SweepError, FileNotFoundError) as e:
+        fail(str(e))
+
+
+@figure_app.command("mechanism")
+def mechanism(
+    store: Annotated[Path, typer.Option("--store", help="Store of a Fig. 6-like sweep, analysed by `slipchain mechanism`.")],
+    out_dir: OutOpt,
+) -> None:
+    """Stick-slip fraction versus theta, per-contact forces, event sizes and spectra; mechanism.md with the numbers."""
+    try:
+        wrote(mechanism_figures(store, out_dir))
+    except (SweepError, FileNotFoundError) as e:
+        fail(str(e))
+
+
+@figure_app.command("velocity")
+def velocity(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over v_d (e.g. presets/velocity.toml).")],
+    out_dir: OutOpt,
+) -> None:
+    """mu_star versus v_d on a log axis, one curve per theta (the model's Figs. 2 and 3)."""
+    try:
+        wrote(figures.velocity(store, out_dir))
+    except SweepError as e:
+        fail(str(e))
+
+
+@figure_app.command("epsilon")
+def epsilon(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over epsilon and theta (presets/epsilon.toml).")],
+    out_dir: OutOpt,
+) -> None:
+    """mu_star versus theta for each epsilon, and the drop from the smallest theta to the largest."""
+    try:
+        paths, lines = figures.epsilon(store, out_dir)
+    except SweepError as e:
+        fail(str(e))
+    wrote(paths)
+    for line in lines:
+        out.print(line)
+
+
+@figure_app.command("dead-weight")
+def dead_weight(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over dead_weight (e.g. presets/dead-weight.toml).")],
+    out_dir: OutOpt,
+) -> None:
+    """Applied mu_star against the measured steady velocity per theta (runaways at the right edge)."""
+    try:
+        wrote(figures.dead_weight(store, out_dir))
+    except SweepError as e:
+        fail(str(e))

@@ -1,0 +1,100 @@
+"""``slipchain sweep``, ``slipchain reproduce`` (the main job) and ``slipchain mechanism``: runs on Dask into a store."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from ..engine.backends import BackendName
+from ..results.schema import Status
+from ..sweeps.definition import Preset, SweepError, load_sweep_definition
+from ..sweeps.executor import SweepReport, run_sweep
+from ..workflows.mechanism import analyse_store
+from ..workflows.reproduce import reproduce as reproduce_job
+from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, sweep_exit
+
+
+def sweep(
+    definition: Annotated[Path, typer.Argument(help="Sweep TOML: [base] config plus [[grid]] tables of value lists.")],
+    store: Annotated[Path, typer.Option("--store", help="Store directory (created; rerun to resume).")],
+    scheduler: SchedulerOpt = None,
+    workers: WorkersOpt = None,
+    progress: ProgressOpt = None,
+    backend: BackendOpt = BackendName.CPU,
+    batch_size: Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Members per task, advanced together (default 1; 256 on the GPU).")] = None,
+) -> None:
+    """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
+    try:
+        report = run_sweep(load_sweep_definition(definition), store, scheduler=scheduler, n_workers=workers,
+                           progress=progress, backend=backend, batch_size=batch_size)
+    except SweepError as e:
+        fail(str(e))
+    print_sweep_report(report)
+    raise typer.Exit(sweep_exit(report))
+
+
+def print_sweep_report(report: SweepReport, console: Console | None = None) -> None:
+    """The end-of-sweep table: what ran, what was skipped, what failed and why."""
+    console = console or out
+    table = Table(title=f"slipchain sweep: {report.store}")
+    table.add_column("members")
+    table.add_column("count", justify="right")
+    completed = [o for o in report.ran if o.status == Status.COMPLETED]
+    table.add_row("ran, completed", str(len(completed)))
+    table.add_row("ran, failed", str(len(report.failed)))
+    table.add_row("skipped (already in the store)", str(len(report.skipped)))
+    table.add_row("not run" + (" (interrupted)" if report.interrupted else ""), str(report.not_run))
+    table.add_row("total", str(report.total))
+    table.add_row("wall time", f"{report.wall_time_s:.1f} s")
+    console.print(table)
+    if report.failed:
+        ft = Table(title="failed members (rerun on the next invocation)")
+        for col in ("member", "status", "reason"):
+            ft.add_column(col, overflow="fold")
+        for o in report.failed:
+            ft.add_row(o.member.label(), o.status, o.message)
+        console.print(ft)
+
+
+def reproduce(
+    preset: Annotated[Preset, typer.Option("--preset", help="quick (60 runs) or paper (Fig. 6 in full).")] = Preset.QUICK,
+    store: Annotated[Optional[Path], typer.Option("--store", help="Store directory (default results/fig6-PRESET/store).")] = None,
+    out_dir: Annotated[Optional[Path], typer.Option("--out", help="Figures and report (default results/fig6-PRESET).")] = None,
+    scheduler: SchedulerOpt = None,
+    workers: WorkersOpt = None,
+    progress: ProgressOpt = None,
+    backend: BackendOpt = BackendName.CPU,
+) -> None:
+    """The main job: the Fig. 6 sweep (resumable), Figs. 5 and 6, and report.md with the paper's claims."""
+    command = " ".join(["slipchain", "reproduce", *sys.argv[2:]]) if len(sys.argv) > 1 else ""
+    try:
+        result = reproduce_job(preset, store, out_dir, scheduler=scheduler, n_workers=workers, progress=progress,
+                               command=command, backend=backend)
+    except SweepError as e:
+        fail(str(e))
+    print_sweep_report(result.sweep)
+    if result.report is not None:
+        out.print(f"report: {result.report}")
+        for p in result.figures:
+            out.print(f"figure: {p}")
+    raise typer.Exit(sweep_exit(result.sweep))
+
+
+def mechanism(
+    store: Annotated[Path, typer.Option("--store", help="Store of a completed Fig. 6-like sweep.")],
+    duration: Annotated[float, typer.Option("--duration", min=1e-6, help="Field recording length, s.")] = 1e-2,
+    interval: Annotated[float, typer.Option("--interval", min=1e-9, help="Sampling interval of u_i(t), s.")] = 1e-6,
+    force: Annotated[bool, typer.Option("--force", help="Redo analyses already in the store.")] = False,
+    backend: BackendOpt = BackendName.CPU,
+) -> None:
+    """Field recordings, slip events and spectra of the lowest and highest theta at each v_d (into STORE/mechanism/)."""
+    try:
+        analyse_store(store, duration=duration, interval=interval, force=force, backend=backend,
+                      on_member=lambda a: out.print(f"{'kept' if a.kept else 'wrote'} {a.path} ({a.member.label()})"))
+    except (SweepError, ValueError, FloatingPointError) as e:
+        fail(str(e))

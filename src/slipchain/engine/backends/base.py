@@ -1,0 +1,118 @@
+"""What every backend shares: the batch layout and the backend protocol.
+
+A backend has one method, ``advance(batch, n_samples, sample_steps)``, over a :class:`Batch` of
+realisations packed into (B, N) / (B, C) / (B, P) arrays (column layout in
+:mod:`slipchain.engine.scheme`); it returns a :class:`ChunkOutput`. The CPU backend
+(:mod:`.cpu`) and the CUDA backend (:mod:`.cuda`) import this module and never each other.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from ...model.system import State, System, dead_weight_force
+from ...results.observables import SLOW_FRACTION
+from .. import scheme as S
+
+
+@dataclass
+class Batch:
+    """Realisations packed into (B, N) / (B, C) arrays for a kernel."""
+
+    x: np.ndarray
+    u: np.ndarray
+    X: np.ndarray
+    U: np.ndarray
+    step: np.ndarray
+    params: np.ndarray
+    sites: np.ndarray
+    vstar: np.ndarray
+    n_contacts: np.ndarray
+    ysolve: np.ndarray
+    status: np.ndarray
+
+    @classmethod
+    def pack(cls, systems: list[System], states: list[State]) -> "Batch":
+        n = systems[0].config.N
+        if any(s.config.N != n for s in systems):
+            raise ValueError("all realisations of a batch must have the same N")
+        b = len(systems)
+        cmax = max(1, max(s.n_contacts for s in systems))
+        params = np.zeros((b, S.N_PARAMS))
+        sites = np.zeros((b, cmax), dtype=np.int64)
+        vstar = np.ones((b, cmax))
+        ncon = np.zeros(b, dtype=np.int64)
+        ysolve = np.zeros((b, S.N_YS, cmax))
+        for r, s in enumerate(systems):
+            params[r] = kernel_params(s)
+            c = s.n_contacts
+            sites[r, :c] = s.contact_sites
+            vstar[r, :c] = s.vstar
+            ncon[r] = c
+            st = states[r]
+            # Warm start for the contact solver: the current contact velocities (y = 0 at rest);
+            # 10**y and exp(-c y^2) are recomputed by the kernel at every sample.
+            uc = np.abs(st.u[s.contact_sites])
+            with np.errstate(divide="ignore"):
+                ysolve[r, S.Y_LOG, :c] = np.where(uc > 0, np.log10(uc / s.vstar), 0.0)
+        return cls(
+            x=np.stack([s.x for s in states]).astype(float),
+            u=np.stack([s.u for s in states]).astype(float),
+            X=np.stack([s.X for s in states]).astype(float),
+            U=np.stack([s.U for s in states]).astype(float),
+            step=np.array([s.step for s in states], dtype=np.int64),
+            params=params,
+            sites=sites,
+            vstar=vstar,
+            n_contacts=ncon,
+            ysolve=ysolve,
+            status=np.full(b, -1, dtype=np.int64),
+        )
+
+    def state(self, row: int) -> State:
+        return State(self.x[row].copy(), self.u[row].copy(), self.X[row].copy(), self.U[row].copy(), int(self.step[row]))
+
+
+def kernel_params(system: System) -> np.ndarray:
+    """The (P,) parameter row for one realisation (column names in :mod:`slipchain.engine.scheme`)."""
+    cfg = system.config
+    p = np.zeros(S.N_PARAMS)
+    p[S.P_K] = cfg.K
+    p[S.P_KL] = cfg.K_L
+    p[S.P_KT] = cfg.K_T
+    p[S.P_KD] = cfg.K_d
+    p[S.P_M] = cfg.m
+    p[S.P_ML] = cfg.N_L * cfg.m
+    p[S.P_META] = cfg.m * cfg.eta
+    p[S.P_VD] = cfg.v_d
+    p[S.P_DT] = cfg.dt
+    p[S.P_AMP] = cfg.epsilon * cfg.f0
+    p[S.P_C] = cfg.c
+    p[S.P_ETAC] = cfg.eta_c
+    p[S.P_SLOW] = SLOW_FRACTION * cfg.v_d
+    if cfg.dead_weight is not None:  # constant force per upper block instead of the drive springs
+        p[S.P_KD] = 0.0
+        p[S.P_FCONST] = dead_weight_force(system)
+    return p
+
+
+@dataclass
+class ChunkOutput:
+    out: np.ndarray  # (B, n_samples, N_OUT)
+    acc: np.ndarray  # (B, N_ACC)
+    cacc: np.ndarray  # (B, N_CACC, C)
+
+
+class Backend(Protocol):
+    """The protocol of a backend (CPU, CUDA): advance every row of ``batch`` by
+    ``n_samples * sample_steps`` steps in place and return the chunk's outputs."""
+
+    name: str
+
+    def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput: ...
+
+
+__all__ = ["Backend", "Batch", "ChunkOutput", "kernel_params"]

@@ -1,0 +1,218 @@
+"""The CPU backend: the scheme of :mod:`slipchain.engine.scheme` compiled with numba, one core.
+
+:func:`advance` loops over the rows of a batch and, per row, over time steps: the explicit
+update of every block (:func:`~slipchain.engine.scheme.block_update`, vectorised over the
+interior blocks), the implicit contact solve (two branch-free Newton steps for all contacts in
+:func:`newton_pass`, which vectorises; the rest in :func:`~slipchain.engine.scheme.solve_contact`),
+then the positions. Accumulates per-sample outputs, work and per-contact sums (column layout in
+:mod:`slipchain.engine.scheme`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, N_ACC, N_CACC, N_OUT,
+                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_AMP, P_C, P_DT, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KT,
+                      P_M, P_META, P_ML, P_SLOW, P_VD, TAYLOR_MAX, Y_LOG, Y_P, Y_Q, compile_for)
+from .base import Batch, ChunkOutput
+
+_scheme = compile_for(lambda name, inline: nb.njit(cache=True, inline="always" if inline else "never"))
+exp_taylor = _scheme.exp_taylor
+scaled_exp = _scheme.scaled_exp
+solve_contact_bracketed = _scheme.solve_contact_bracketed
+taylor_newton_step = _scheme.taylor_newton_step
+solve_contact = _scheme.solve_contact
+block_update = _scheme.block_update
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def newton_pass(nc, ra, vstar, ys, unew, ok, m_eff, b, c):
+    """Two Newton steps from the warm start for every contact, branch-free so that it vectorises.
+
+    Same equation as :func:`~slipchain.engine.scheme.solve_contact`, for ra = |r| > 0 and c > 0; 10**y and exp(-c y^2)
+    are updated by Taylor series, valid while the steps are small. A contact is accepted
+    (ok = True) if the second step is below NEWTON_TOL (the error left is then < 3e-10 decades)
+    and every update stayed in the Taylor range; otherwise it keeps its warm start and
+    :func:`~slipchain.engine.scheme.solve_contact` finishes it.
+    """
+    for k in range(nc):
+        a = m_eff * vstar[k]
+        y0 = ys[Y_LOG, k]
+        p0 = ys[Y_P, k]
+        q0 = ys[Y_Q, k]
+        y1, p1, q1, dh1, _, e1 = taylor_newton_step(a, b, c, ra[k], y0, p0, q0)
+        y2, p2, q2, dh2, d2, e2 = taylor_newton_step(a, b, c, ra[k], y1, p1, q1)
+        good = ((dh1 > 0.0) & (dh2 > 0.0) & (abs(d2) < NEWTON_TOL) & (e1 <= TAYLOR_MAX)
+                & (e2 <= TAYLOR_MAX) & (ra[k] > 1e-300))
+        ok[k] = good
+        ys[Y_LOG, k] = y2 if good else y0
+        ys[Y_P, k] = p2 if good else p0
+        ys[Y_Q, k] = q2 if good else q0
+        unew[k] = vstar[k] * p2
+
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL):
+    """Explicit velocity update of all blocks (springs, drive, damping); returns sum of drive forces.
+
+    Interior blocks in one branch-free loop (vectorisable); the two periodic ends separately.
+    """
+    n = xr.size
+    for i in range(1, n - 1):
+        block_update(i, i + 1, i - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm,
+                      dtmL)
+    block_update(0, 1, n - 1, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL)
+    block_update(n - 1, 0, n - 2, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm,
+                  dtmL)
+    sx = 0.0
+    for i in range(n):
+        sx += Xr[i]
+    return Kd * (n * drive - sx)
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt):
+    """Positions from the new velocities; returns the work of the damping forces over the step."""
+    wd = 0.0
+    for i in range(xr.size):
+        xr[i] += dt * un[i]
+        Xr[i] += dt * Un[i]
+        wd += dampx[i] * un[i] + dampX[i] * Un[i]
+        ur[i] = un[i]
+        Ur[i] = Un[i]
+    return wd * dt
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _contact_sums(nc, fk, uk, ca, slow):
+    """Accumulate per-contact force, velocity, velocity**2, slow steps; returns sum f*u."""
+    p = 0.0
+    for k in range(nc):
+        ca[C_F, k] += fk[k]
+        ca[C_U, k] += uk[k]
+        ca[C_U2, k] += uk[k] * uk[k]
+        ca[C_SLOW, k] += 1.0 if abs(uk[k]) < slow else 0.0
+        p += fk[k] * uk[k]
+    return p
+
+
+@nb.njit(cache=True)
+def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_samples, sample_steps,
+            out, acc, cacc, status):
+    """Advance every row b of the batch by n_samples*sample_steps steps (scheme: module docstring).
+
+    In/out: x, u, X, U (B, N); step (B,) int64 steps taken; ysolve (B, N_YS, C) contact solver
+    warm starts. Inputs: params (B, P); sites, vstar (B, C); n_contacts (B,).
+    Outputs (accumulated, zero them to restart): out (B, n_samples, N_OUT) per-sample values;
+    acc (B, N_ACC) work sums [J]; cacc (B, N_CACC, C) per-contact sums over steps.
+    status (B,): -1 while finite; set to the step at which a non-finite value appeared (the row
+    then stops advancing).
+    """
+    nb_rows, n = x.shape
+    cmax = sites.shape[1]
+    un = np.empty(n)
+    Un = np.empty(n)
+    dampx = np.empty(n)
+    dampX = np.empty(n)
+    rk = np.empty(cmax)
+    ra = np.empty(cmax)
+    uk = np.empty(cmax)
+    fk = np.empty(cmax)
+    ok = np.empty(cmax, dtype=np.bool_)
+    for row in range(nb_rows):
+        if status[row] >= 0:
+            continue
+        K = params[row, P_K]
+        KL = params[row, P_KL]
+        KT = params[row, P_KT]
+        Kd = params[row, P_KD]
+        m = params[row, P_M]
+        meta = params[row, P_META]
+        vd = params[row, P_VD]
+        fconst = params[row, P_FCONST]
+        dt = params[row, P_DT]
+        dtm = dt / m
+        dtmL = dt / params[row, P_ML]
+        inv_dt = 1.0 / dt
+        bc = dt * params[row, P_AMP]
+        c = params[row, P_C]
+        m_eff = m * (1.0 + dt * params[row, P_ETAC])
+        slow = params[row, P_SLOW]
+        nc = n_contacts[row]
+        xr = x[row]
+        ur = u[row]
+        Xr = X[row]
+        Ur = U[row]
+        ys = ysolve[row]
+        ca = cacc[row]
+        vs = vstar[row]
+        st = sites[row]
+        w_drive = 0.0
+        w_damp = 0.0
+        w_contact = 0.0
+        for s in range(n_samples):
+            for k in range(nc):  # exact 10**y and exp(-c y^2): no round-off drift of the updates
+                ys[Y_P, k] = math.exp(LN10 * ys[Y_LOG, k])
+                ys[Y_Q, k] = math.exp(-c * ys[Y_LOG, k] * ys[Y_LOG, k])
+            fd_sum = 0.0
+            for _ in range(sample_steps):
+                drive = vd * (step[row] * dt)
+                fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm,
+                                        dtmL)
+                for k in range(nc):
+                    rk[k] = m * un[st[k]]
+                    ra[k] = abs(rk[k])
+                if c > 0.0:
+                    newton_pass(nc, ra, vs, ys, uk, ok, m_eff, bc, c)
+                else:
+                    ok[:nc] = False
+                for k in range(nc):
+                    if ok[k]:
+                        uk[k] = math.copysign(uk[k], rk[k])
+                    else:
+                        uk[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact(
+                            rk[k], m_eff, bc, c, vs[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k])
+                    fk[k] = (rk[k] - m * uk[k]) * inv_dt  # the contact force f(u) actually applied
+                    un[st[k]] = uk[k]
+                w_contact -= _contact_sums(nc, fk, uk, ca, slow) * dt
+                w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
+                w_drive += fsum * vd * dt
+                fd_sum += fsum / n
+                step[row] += 1
+            xs = 0.0
+            Xs = 0.0
+            for i in range(n):
+                xs += xr[i]
+                Xs += Xr[i]
+            out[row, s, O_FD] += fd_sum / sample_steps
+            out[row, s, O_XMEAN] += xs / n
+            out[row, s, O_XUMEAN] += Xs / n
+            if not (math.isfinite(fd_sum) and math.isfinite(xs) and math.isfinite(w_contact)):
+                status[row] = step[row]
+                break
+        acc[row, A_WDRIVE] += w_drive
+        acc[row, A_WDAMP] += w_damp
+        acc[row, A_WCONTACT] += w_contact
+
+
+class CPUBackend:
+    """The numba kernel on one CPU core: ``advance(batch, n_samples, sample_steps)``."""
+
+    name = "cpu"
+
+    def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
+        b = batch.x.shape[0]
+        out = np.zeros((b, n_samples, N_OUT))
+        acc = np.zeros((b, N_ACC))
+        cacc = np.zeros((b, N_CACC, batch.sites.shape[1]))
+        advance(batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar,
+                batch.n_contacts, batch.ysolve, n_samples, sample_steps, out, acc, cacc, batch.status)
+        return ChunkOutput(out, acc, cacc)
+
+
+__all__ = ["CPUBackend", "advance", "block_update", "newton_pass", "solve_contact", "solve_contact_bracketed"]

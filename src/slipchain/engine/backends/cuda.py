@@ -1,0 +1,214 @@
+"""The CUDA backend (numba.cuda): a batch of realisations in one launch, the time loop inside the kernel.
+
+One CUDA thread block per realisation (row of the batch); its threads share the chain's blocks
+(thread t owns blocks t, t + T, t + 2T, ...) and its contacts (likewise). One time step is the
+scheme of :mod:`slipchain.engine.scheme`, the same source the CPU backend compiles, here compiled
+as device functions, separated by block-wide barriers:
+
+1. explicit velocity update of every owned block (:func:`~slipchain.engine.scheme.block_update`);
+2. barrier; each owned contact solves its implicit equation ``m_eff*u + dt*f(u) = r``
+   (:func:`~slipchain.engine.scheme.solve_contact`: warm-started Newton in y = log10(|u|/v*),
+   bracketed fallback), with 10**y and exp(-c y^2) recomputed exactly at every sample as on the CPU;
+3. barrier; positions; barrier.
+
+Per-sample outputs (mean f_d, mean x, mean X) are reduced across the block in shared memory
+once per sample; work and per-contact sums stay in registers/global memory. No per-step launch
+or host round trip: the host copies the batch in and out once per call of :meth:`CUDABackend.advance`
+(a chunk of 0.5 ms of simulated time in :func:`slipchain.engine.simulate.simulate`).
+
+Why numba.cuda and not CuPy raw kernels: the scheme is numba-compiled Python already; numba.cuda
+compiles the same functions for the device (no second implementation in CUDA C), and its
+simulator (``NUMBA_ENABLE_CUDASIM=1``) runs the kernel on the CPU, so CI tests it without a GPU.
+Importing this module never needs CUDA: the kernel is compiled on first launch.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import cuda, float64  # imports without a GPU; kernels compile on first launch
+
+from .. import scheme as S
+from .base import Batch, ChunkOutput
+
+THREADS_MAX = 128  # threads per block (shared-memory reduction size); fewer for small chains
+
+
+def cuda_available() -> bool:
+    """True when numba.cuda finds a GPU (or its simulator is enabled)."""
+    try:
+        return bool(cuda.is_available())
+    except Exception:  # pragma: no cover - numba without its CUDA target
+        return False
+
+
+_scheme = S.compile_for(lambda name, inline: cuda.jit(device=True))
+solve_contact = _scheme.solve_contact
+block_update = _scheme.block_update
+LN10 = S.LN10
+P_K, P_KL, P_KT, P_KD, P_M, P_ML, P_META = S.P_K, S.P_KL, S.P_KT, S.P_KD, S.P_M, S.P_ML, S.P_META
+P_VD, P_FCONST, P_DT, P_AMP, P_C, P_ETAC, P_SLOW = S.P_VD, S.P_FCONST, S.P_DT, S.P_AMP, S.P_C, S.P_ETAC, S.P_SLOW
+O_FD, O_XMEAN, O_XUMEAN = S.O_FD, S.O_XMEAN, S.O_XUMEAN
+A_WDRIVE, A_WDAMP, A_WCONTACT = S.A_WDRIVE, S.A_WDAMP, S.A_WCONTACT
+C_F, C_U, C_U2, C_SLOW = S.C_F, S.C_U, S.C_U2, S.C_SLOW
+Y_LOG, Y_P, Y_Q = S.Y_LOG, S.Y_P, S.Y_Q
+
+
+@cuda.jit(device=True)
+def _block_sum(buf, value, tid, nthreads):
+    buf[tid] = value
+    cuda.syncthreads()
+    stride = 1
+    while stride < nthreads:
+        if tid % (2 * stride) == 0 and tid + stride < nthreads:
+            buf[tid] += buf[tid + stride]
+        cuda.syncthreads()
+        stride *= 2
+    total = buf[0]
+    cuda.syncthreads()
+    return total
+
+
+@cuda.jit
+def advance_kernel(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_samples, sample_steps,
+                   out, acc, cacc, status, un, Un, dampx, dampX):
+    row = cuda.blockIdx.x
+    tid = cuda.threadIdx.x
+    nthreads = cuda.blockDim.x
+    buf = cuda.shared.array(THREADS_MAX, float64)
+    n = x.shape[1]
+    if status[row] >= 0:
+        return
+    xr, ur, Xr, Ur = x[row], u[row], X[row], U[row]
+    unr, Unr, dxr, dXr = un[row], Un[row], dampx[row], dampX[row]
+    ys = ysolve[row]
+    K = params[row, P_K]
+    KL = params[row, P_KL]
+    KT = params[row, P_KT]
+    Kd = params[row, P_KD]
+    m = params[row, P_M]
+    meta = params[row, P_META]
+    vd = params[row, P_VD]
+    fconst = params[row, P_FCONST]
+    dt = params[row, P_DT]
+    dtm = dt / m
+    dtmL = dt / params[row, P_ML]
+    bc = dt * params[row, P_AMP]
+    c = params[row, P_C]
+    m_eff = m * (1.0 + dt * params[row, P_ETAC])
+    slow = params[row, P_SLOW]
+    nc = n_contacts[row]
+    step0 = step[row]
+    w_drive = 0.0
+    w_damp = 0.0
+    w_contact = 0.0
+    bad = 0
+    for s in range(n_samples):
+        k = tid
+        while k < nc:  # exact 10**y and exp(-c y^2) at every sample, as on the CPU
+            ys[Y_P, k] = math.exp(LN10 * ys[Y_LOG, k])
+            ys[Y_Q, k] = math.exp(-c * ys[Y_LOG, k] * ys[Y_LOG, k])
+            k += nthreads
+        fd_local = 0.0
+        for j in range(sample_steps):
+            drive = vd * ((step0 + s * sample_steps + j) * dt)
+            fsum_local = 0.0
+            i = tid
+            while i < n:
+                ip = i + 1 if i + 1 < n else 0
+                im = i - 1 if i > 0 else n - 1
+                block_update(i, ip, im, xr, ur, Xr, Ur, unr, Unr, dxr, dXr, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL)
+                fsum_local += Kd * (drive - Xr[i])
+                i += nthreads
+            cuda.syncthreads()
+            k = tid
+            while k < nc:
+                site = sites[row, k]
+                r = m * unr[site]
+                uk, ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact(r, m_eff, bc, c, vstar[row, k], ys[Y_LOG, k],
+                                                                         ys[Y_P, k], ys[Y_Q, k])
+                fk = (r - m * uk) / dt
+                unr[site] = uk
+                cacc[row, C_F, k] += fk
+                cacc[row, C_U, k] += uk
+                cacc[row, C_U2, k] += uk * uk
+                if abs(uk) < slow:
+                    cacc[row, C_SLOW, k] += 1.0
+                w_contact -= fk * uk * dt
+                k += nthreads
+            cuda.syncthreads()
+            i = tid
+            while i < n:
+                xr[i] += dt * unr[i]
+                Xr[i] += dt * Unr[i]
+                w_damp += (dxr[i] * unr[i] + dXr[i] * Unr[i]) * dt
+                ur[i] = unr[i]
+                Ur[i] = Unr[i]
+                i += nthreads
+            w_drive += fsum_local * vd * dt
+            fd_local += fsum_local / n
+            cuda.syncthreads()
+        xs_local = 0.0
+        Xs_local = 0.0
+        i = tid
+        while i < n:
+            xs_local += xr[i]
+            Xs_local += Xr[i]
+            i += nthreads
+        fd = _block_sum(buf, fd_local, tid, nthreads)
+        xs = _block_sum(buf, xs_local, tid, nthreads)
+        Xs = _block_sum(buf, Xs_local, tid, nthreads)
+        wc = _block_sum(buf, w_contact, tid, nthreads)
+        if tid == 0:
+            out[row, s, O_FD] += fd / sample_steps
+            out[row, s, O_XMEAN] += xs / n
+            out[row, s, O_XUMEAN] += Xs / n
+        if not (math.isfinite(fd) and math.isfinite(xs) and math.isfinite(wc)):
+            bad = 1
+            if tid == 0:
+                status[row] = step0 + (s + 1) * sample_steps
+            break
+    wd = _block_sum(buf, w_drive, tid, nthreads)
+    wdamp = _block_sum(buf, w_damp, tid, nthreads)
+    wc = _block_sum(buf, w_contact, tid, nthreads)
+    if tid == 0:
+        acc[row, A_WDRIVE] += wd
+        acc[row, A_WDAMP] += wdamp
+        acc[row, A_WCONTACT] += wc
+        step[row] = status[row] if bad else step0 + n_samples * sample_steps
+
+
+class CUDABackend:
+    """Same interface as :class:`~slipchain.engine.backends.cpu.CPUBackend`: ``advance(batch, n_samples, sample_steps)``."""
+
+    name = "gpu"
+
+    def __init__(self, threads: int | None = None):
+        if not cuda_available():
+            raise RuntimeError("backend 'gpu' needs a CUDA GPU (numba.cuda found none); use backend 'cpu' or 'auto'")
+        self.threads = threads
+
+    def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
+        b, n = batch.x.shape
+        cmax = batch.sites.shape[1]
+        threads = self.threads or min(THREADS_MAX, max(1, n))
+        out = np.zeros((b, n_samples, S.N_OUT))
+        acc = np.zeros((b, S.N_ACC))
+        cacc = np.zeros((b, S.N_CACC, cmax))
+        d = {k: cuda.to_device(np.ascontiguousarray(v)) for k, v in dict(
+            x=batch.x, u=batch.u, X=batch.X, U=batch.U, step=batch.step, params=batch.params, sites=batch.sites,
+            vstar=batch.vstar, n_contacts=batch.n_contacts, ysolve=batch.ysolve, out=out, acc=acc, cacc=cacc,
+            status=batch.status).items()}
+        scratch = [cuda.device_array((b, n)) for _ in range(4)]
+        advance_kernel[b, threads](d["x"], d["u"], d["X"], d["U"], d["step"], d["params"], d["sites"], d["vstar"],
+                                   d["n_contacts"], d["ysolve"], n_samples, sample_steps, d["out"], d["acc"], d["cacc"],
+                                   d["status"], *scratch)
+        for name in ("x", "u", "X", "U", "step", "status", "ysolve"):
+            getattr(batch, name)[...] = d[name].copy_to_host()
+        return ChunkOutput(d["out"].copy_to_host(), d["acc"].copy_to_host(), d["cacc"].copy_to_host())
+
+
+GPUBackend = CUDABackend  # the name used before 0.2
+
+__all__ = ["CUDABackend", "GPUBackend", "THREADS_MAX", "cuda_available"]

@@ -1,0 +1,74 @@
+"""The one time loop: compiled chunks, then run control and observers, until every row is done.
+
+Loop order (each chunk), as in hoomd's ``Simulation.run``:
+
+1. the rows still active and the chunk length: at most ``chunk`` samples, at most what any live
+   row has left, one sample while a dead-weight ramp is rising (:mod:`.control`);
+2. the dead-weight force of each ramping row is written into its parameters;
+3. the backend advances every live row by ``n`` samples of ``sample_steps`` steps in compiled
+   code (finished rows are skipped by the kernel);
+4. the work of the constant dead-weight forces is added (F_b times the upper layer's displacement);
+5. every observer sees the chunk (:mod:`.observers`: recorder, field recorder, progress bar);
+6. each live row's control decides: ``diverged`` if the kernel flagged a non-finite state, else
+   stop at its length limit or once converged; a finished row is marked for the kernel to skip.
+
+Ctrl-C (KeyboardInterrupt) during the loop stops every active row with status ``interrupted``:
+what was simulated is kept and returned like a finished run.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..results.schema import Status
+from . import scheme as S
+from .backends.base import Backend, Batch
+from .control import RowControl
+from .observers import Observer
+
+
+def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_steps: int, chunk: int,
+          interval: float, observers: list[Observer] = ()) -> None:
+    """Advance ``batch`` until every row's control says stop (loop order: module docstring).
+
+    **Arguments:** ``backend`` advances the batch; ``controls`` one :class:`RowControl` per row
+    (updated in place: status, message, samples done); ``sample_steps`` steps per output sample;
+    ``chunk`` samples per compiled call at most; ``interval`` the output interval (s, for
+    messages); ``observers`` see every chunk.
+    """
+    try:
+        while any(c.active for c in controls):
+            live = [i for i, c in enumerate(controls) if c.active]
+            n = min(chunk, min(controls[i].remaining for i in live))
+            f_now = np.zeros(len(controls))
+            sum_x0 = batch.X.sum(axis=1)
+            for i in live:
+                ramp = controls[i].ramp
+                if ramp is not None:
+                    f_now[i] = ramp.force(controls[i].n)
+                    batch.params[i, S.P_FCONST] = f_now[i]
+                    n = min(n, ramp.max_samples(controls[i].n))
+            co = backend.advance(batch, n, sample_steps)
+            co.acc[:, S.A_WDRIVE] += f_now * (batch.X.sum(axis=1) - sum_x0)  # work of the constant forces
+            for obs in observers:
+                obs.chunk(batch, co, live, n)
+            for i in live:
+                c = controls[i]
+                if batch.status[i] >= 0:
+                    step = int(batch.status[i])
+                    c.n += n
+                    c.stop(Status.DIVERGED, f"non-finite state at step {step} (t = {step * batch.params[i, S.P_DT]:.6e} s)")
+                    continue
+                c.after_chunk(n, co.out[i])
+                if not c.active:
+                    batch.status[i] = batch.step[i]  # finished: the kernel skips this row from now on
+    except KeyboardInterrupt:
+        for c in controls:
+            if c.active:
+                c.stop(Status.INTERRUPTED, f"interrupted by the user at t = {c.n * interval:.6e} s")
+    finally:
+        for obs in observers:
+            obs.close()
+
+
+__all__ = ["drive"]

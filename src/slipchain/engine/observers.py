@@ -1,0 +1,129 @@
+"""Observers of the time loop: called by the driver after every compiled chunk.
+
+An observer has ``chunk(batch, out, live, n)`` (``out`` the :class:`~.backends.base.ChunkOutput`,
+``live`` the rows that ran, ``n`` the samples they ran; called before the run controls decide
+whether a row stops) and ``close()``. Three ship:
+:class:`Recorder` (the run's time series and per-contact sums, for the result Dataset),
+:class:`FieldRecorder` (instantaneous fields after every chunk, for the mechanism) and
+:class:`ProgressBar` (a rich bar on a terminal).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Protocol
+
+import numpy as np
+
+from ..results.schema import Recording
+from . import scheme as S
+from .backends.base import Batch, ChunkOutput
+
+
+class Observer(Protocol):
+    def chunk(self, batch: Batch, out: ChunkOutput, live: list[int], n: int) -> None: ...
+
+    def close(self) -> None: ...
+
+
+class Recorder:
+    """Collects every row's chunk outputs: per-sample f_d and mean displacements, per-chunk
+    per-contact sums, and the work sums."""
+
+    def __init__(self, n_contacts: list[int]):
+        self.n_contacts = n_contacts
+        self.samples: list[list[np.ndarray]] = [[] for _ in n_contacts]
+        self.contact_sums: list[list[np.ndarray]] = [[] for _ in n_contacts]
+        self.chunk_starts: list[list[int]] = [[] for _ in n_contacts]
+        self.works = np.zeros((len(n_contacts), S.N_ACC))
+        self.n = [0] * len(n_contacts)
+
+    def chunk(self, batch: Batch, out: ChunkOutput, live: list[int], n: int) -> None:
+        for i in live:
+            nc = self.n_contacts[i]
+            self.chunk_starts[i].append(self.n[i])
+            self.samples[i].append(out.out[i].copy())
+            self.contact_sums[i].append(out.cacc[i, :, :nc].T.copy())
+            self.works[i] += out.acc[i]
+            self.n[i] += out.out.shape[1]
+
+    def recording(self, row: int) -> Recording:
+        """Row ``row``'s recording in the run schema's plain form."""
+        series = np.concatenate(self.samples[row]) if self.samples[row] else np.zeros((0, S.N_OUT))
+        return Recording(f_d=series[:, S.O_FD], x_mean=series[:, S.O_XMEAN], X_mean=series[:, S.O_XUMEAN],
+                         chunk_starts=list(self.chunk_starts[row]), chunk_samples=[s.shape[0] for s in self.samples[row]],
+                         contact_sums=list(self.contact_sums[row]),
+                         works=self.works[row][[S.A_WDRIVE, S.A_WDAMP, S.A_WCONTACT]])
+
+    def close(self) -> None:
+        pass
+
+
+class FieldRecorder:
+    """Instantaneous fields of one row after every chunk: the interface velocities u_i(t), the
+    driving force f_d(t) = K_d (v_d t - <X>) and the acoustic proxy A(t) = sum_i f(u_i, v*_i)."""
+
+    def __init__(self, system, n_max: int, row: int = 0):
+        self.system = system
+        self.row = row
+        cfg = system.config
+        self.t = np.empty(n_max)
+        self.u = np.empty((n_max, cfg.N), dtype=np.float32)
+        self.f_d = np.empty(n_max)
+        self.acoustic = np.empty(n_max)
+        self.k = 0
+
+    def chunk(self, batch: Batch, out: ChunkOutput, live: list[int], n: int) -> None:
+        if self.row not in live or batch.status[self.row] >= 0:  # not run, or went non-finite
+            return
+        cfg = self.system.config
+        law = cfg.contact_law
+        sites, vstar = self.system.contact_sites, self.system.vstar
+        uk = batch.u[self.row]
+        k = self.k
+        self.t[k] = batch.step[self.row] * cfg.dt
+        self.u[k] = uk
+        self.f_d[k] = cfg.K_d * (cfg.v_d * self.t[k] - batch.X[self.row].mean())
+        self.acoustic[k] = float(np.sum(law.force(uk[sites], vstar))) if sites.size else 0.0
+        self.k += 1
+
+    def close(self) -> None:
+        pass
+
+
+class ProgressBar:
+    """A rich progress bar for one run, shown on a terminal once it has taken more than 2 s."""
+
+    def __init__(self, enabled: bool | None, control, interval: float):
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.control = control
+        self.interval = interval
+        self.total = control.limit * interval
+        self._bar = None
+        self._task = None
+        self._t0 = time.perf_counter()
+
+    def chunk(self, batch: Batch, out: ChunkOutput, live: list[int], n: int) -> None:
+        if not self.enabled or time.perf_counter() - self._t0 < 2.0:
+            return
+        if self._bar is None:
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+            self._bar = Progress(TextColumn("[bold]slipchain run"), BarColumn(),
+                                 TextColumn("{task.completed:.4f}/{task.total:.4f} s simulated"),
+                                 TextColumn("{task.fields[info]}"), TimeElapsedColumn(), TimeRemainingColumn())
+            self._bar.start()
+            auto = self.control.converge is not None
+            self._task = self._bar.add_task("run", total=self.total,
+                                            info="up to t_max; stops at sem_target" if auto else "")
+        sem = self.control.converge.sem if self.control.converge is not None else float("nan")
+        info = f"SE(mu*) = {sem:.4f}" if np.isfinite(sem) else ""
+        self._bar.update(self._task, completed=(self.control.n + n) * self.interval, info=info)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+
+
+__all__ = ["FieldRecorder", "Observer", "ProgressBar", "Recorder"]

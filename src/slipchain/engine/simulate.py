@@ -1,0 +1,84 @@
+"""Run realisations: the public entry points :func:`run`, :func:`simulate` and :func:`simulate_batch`.
+
+config -> system (disorder from the seed) -> start state -> batch -> the one time loop
+(:func:`.driver.drive`, with :class:`.control.RowControl` per row and the
+:class:`.observers.Recorder`) -> the run Dataset (:func:`slipchain.results.schema.assemble_run`:
+MSER transient, mu_star with its batch-means error, physics checks).
+
+mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (MODEL.md, "Start and measurement").
+Where the run is computed is an argument (``backend``: 'cpu', 'gpu', 'auto' or a backend object),
+never part of the config: the same config gives the same physics on every backend.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Mapping
+
+import numpy as np
+import xarray as xr
+
+from ..model.config import Config, make_config
+from ..model.system import State, System, build_system, initial_state
+from ..results.checks import stored_energy
+from ..results.schema import assemble_run
+from .backends import BackendName, Batch, get_backend
+from .control import CHUNK_TIME, row_control
+from .driver import drive
+from .observers import ProgressBar, Recorder
+
+
+def run(config: Config | Mapping[str, Any] | None = None, *, backend: str | BackendName = BackendName.CPU,
+        progress: bool | None = None) -> xr.Dataset:
+    """Run the model for ``config`` (a Config, a mapping of overrides, or None for the defaults).
+
+    **Returns:** the run Dataset (docs/run-schema.md).
+    """
+    cfg = config if isinstance(config, Config) else make_config(dict(config or {}))
+    return simulate(build_system(cfg), backend=backend, progress=progress)
+
+
+def simulate(system: System, state: State | None = None, *, backend: str | BackendName = BackendName.CPU,
+             progress: bool | None = None) -> xr.Dataset:
+    """Integrate one realisation from ``state`` (default: the config's start) to a run Dataset."""
+    return simulate_batch([system], None if state is None else [state], backend=backend, progress=progress)[0]
+
+
+def simulate_batch(systems: list[System], states: list[State] | None = None, *,
+                   backend: str | BackendName = BackendName.CPU, progress: bool | None = None) -> list[xr.Dataset]:
+    """Integrate several realisations together (one backend call advances all of them).
+
+    They must share N, dt and the output interval (one kernel launch runs them in lock-step);
+    each row has its own length control (fixed, automatic, dead-weight ramp) and stops on its
+    own: a finished row is skipped by the kernel. On the GPU this is how a sweep fills the device.
+    The wall time recorded for every row is the batch's.
+    """
+    cfg0 = systems[0].config
+    for s in systems:
+        c = s.config
+        if (c.N, c.dt, c.sample_steps) != (cfg0.N, cfg0.dt, cfg0.sample_steps):
+            raise ValueError("a batch needs equal N, dt and output_interval; got "
+                             f"{(c.N, c.dt, c.output_interval)} and {(cfg0.N, cfg0.dt, cfg0.output_interval)}")
+    engine = get_backend(backend)
+    states0 = [initial_state(s) if states is None or states[i] is None else states[i].copy()
+               for i, s in enumerate(systems)]
+    batch = Batch.pack(systems, states0)
+    sample_steps = cfg0.sample_steps
+    interval = sample_steps * cfg0.dt
+    x0 = [float(np.mean(st.x)) for st in states0]
+    e0 = [stored_energy(s, st) for s, st in zip(systems, states0)]
+    controls = [row_control(s, x0[i], interval) for i, s in enumerate(systems)]
+    recorder = Recorder([s.n_contacts for s in systems])
+    observers = [recorder, ProgressBar(progress if len(systems) == 1 else False, controls[0], interval)]
+    wall0 = time.perf_counter()
+    drive(engine, batch, controls, sample_steps=sample_steps, chunk=max(1, int(round(CHUNK_TIME / interval))),
+          interval=interval, observers=observers)
+    wall = time.perf_counter() - wall0
+    return [assemble_run(s, recorder.recording(i), batch.state(i), x0_mean=x0[i], e0=e0[i], interval=interval,
+                         steps_per_sample=sample_steps, status=c.status,
+                         message=c.final_message(s.config.t_max, s.config.sem_target), sem_reached=c.sem_reached,
+                         wall=wall, backend=engine.name)
+            for i, (s, c) in enumerate(zip(systems, controls))]
+
+
+__all__ = ["run", "simulate", "simulate_batch"]

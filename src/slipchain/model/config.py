@@ -1,0 +1,307 @@
+"""Validated, frozen run configuration: every parameter of MODEL.md under its name, SI units.
+
+A config is read from a flat TOML file and overridden by ``name=value`` strings (the CLI's
+``--set``). Anything wrong (an unknown key, a non-number, a value out of range) raises
+:class:`ConfigError`, whose message names the key, the value and what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any, Literal, Mapping, Sequence
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .contact_law import ContactLaw
+
+# What each key accepts, in words; used in every error message.
+ALLOWED: dict[str, str] = {
+    "a": "a number > 0 (block size, m)",
+    "rho": "a number > 0 (mass density, kg/m^3)",
+    "E": "a number > 0 (Young modulus, Pa)",
+    "nu": "a number in (-1, 0.5] (Poisson ratio)",
+    "N_L": "an integer >= 1 (upper-layer height in blocks)",
+    "N": "an integer >= 3 (blocks per chain)",
+    "tau_f": "a number > 0 (frictional shear stress, Pa)",
+    "c": "a number >= 0",
+    "v0": "a number > 0 (m/s)",
+    "delta": "a number >= 0 (decades)",
+    "epsilon": "a number > 0",
+    "eta": "a number >= 0 (1/s)",
+    "eta_c": "a number >= 0 (1/s)",
+    "theta": "a number in (0, 1]",
+    "v_d": "a number > 0 (m/s)",
+    "start": "one of 'rest', 'steady'",
+    "dead_weight": "a number > 0 (applied force per block in units of epsilon*f0*theta), or absent for the spring drive",
+    "dt": "a number > 0 (s)",
+    "t_total": "a number > 0 (s), or absent for an automatic run length",
+    "t_max": "a number > 0 (s)",
+    "sem_target": "a number > 0",
+    "output_interval": "a number > 0 (s), at least dt",
+    "seed": "an integer >= 0",
+}
+
+# Keys that older versions wrote into configs (stored run attrs, a store's sweep.toml) and that are
+# no longer part of what is simulated. Accepted and dropped when reading stored files (legacy=True);
+# rejected with this explanation in new input.
+LEGACY_KEYS: dict[str, str] = {
+    "backend": "how a run is executed is not part of what is simulated: give the backend to run(..., backend=...), "
+               "simulate(), run_sweep() or the CLI's --backend instead",
+}
+
+
+class ConfigError(ValueError):
+    """A rejected configuration; the message names key, value and what is allowed."""
+
+
+class Config(BaseModel):
+    """All parameters of one run (MODEL.md names; defaults are the paper's values).
+
+    Model: ``a`` (a), ``rho`` (rho), ``E`` (E), ``nu`` (nu), ``N_L`` (N_L), ``N`` (N),
+    ``tau_f`` (tau_f), ``c`` (c), ``v0`` (v_0), ``delta`` (delta), ``epsilon`` (varepsilon),
+    ``eta`` (eta, 0.3*omega0), ``eta_c`` (eta_c; default 0.1*omega0), ``theta`` (theta),
+    ``v_d`` (v, the drive velocity), ``start`` ('rest' or 'steady', MODEL.md "Start").
+    ``dead_weight``: None (default) drives the upper layer through the springs K_d at v_d; a
+    number mu_a replaces them by a constant force F_b = mu_a*epsilon*f0*theta on every upper block
+    (a hanging weight, as in the experiment): mu_a is the applied mu_star, and the run measures
+    the velocity (``v_d`` then only sets the steady start and the "slow" threshold).
+
+    Run control: ``dt`` time step; ``t_total`` fixed run length, or None for automatic
+    (run until the standard error of mu_star is below ``sem_target``, at most ``t_max``);
+    ``output_interval`` sampling interval of f_d(t) (each sample is the average over the
+    interval); ``seed`` for the disorder. Where a run is executed (CPU or GPU) is not part of the
+    config: it is an argument of :func:`slipchain.run` and the CLI's ``--backend``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+
+    a: float = Field(1e-4, gt=0)
+    rho: float = Field(1e3, gt=0)
+    E: float = Field(1e7, gt=0)
+    nu: float = Field(0.5, gt=-1, le=0.5)
+    N_L: int = Field(5, ge=1)
+    N: int = Field(301, ge=3)
+    tau_f: float = Field(6.5e6, gt=0)
+    c: float = Field(0.1, ge=0)
+    v0: float = Field(1e-3, gt=0)
+    delta: float = Field(0.5, ge=0)
+    epsilon: float = Field(1e-2, gt=0)
+    eta: float = Field(3e5, ge=0)
+    eta_c: float = Field(1e5, ge=0)
+    theta: float = Field(1.0, gt=0, le=1)
+    v_d: float = Field(1e-3, gt=0)
+    start: Literal["rest", "steady"] = "rest"
+    dead_weight: float | None = Field(None, gt=0)
+
+    dt: float = Field(2e-8, gt=0)
+    t_total: float | None = Field(None, gt=0)
+    t_max: float = Field(0.25, gt=0)
+    sem_target: float = Field(0.01, gt=0)
+    output_interval: float = Field(1e-5, gt=0)
+    seed: int = Field(0, ge=0)
+
+    @model_validator(mode="after")
+    def _check_combinations(self) -> "Config":
+        for key in ALLOWED:
+            value = getattr(self, key)
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ValueError(_message(key, value, ALLOWED[key] + ", finite"))
+        if round(self.theta * self.N) < 1:
+            raise ValueError(
+                _message("theta", self.theta, f"theta*N >= 0.5 so that N_c = round(theta*N) >= 1 (N = {self.N})")
+            )
+        if self.output_interval < self.dt:
+            raise ValueError(_message("output_interval", self.output_interval, f"at least dt = {self.dt:g}"))
+        dt_max = self.dt_unique_root_limit
+        if self.dt >= dt_max:
+            raise ValueError(
+                _message(
+                    "dt",
+                    self.dt,
+                    f"dt < {dt_max:.3g} s: above it the per-contact implicit equation "
+                    "m*u + dt*f(u) = r has several roots on the weakening branch of the slowest "
+                    "contact (v* = v0*10**-delta) and the dynamics are not those of the model",
+                )
+            )
+        return self
+
+    # --- derived quantities (MODEL.md tables) -------------------------------------------
+    @property
+    def m(self) -> float:
+        """Interface-block mass m = rho*a**3 [kg]."""
+        return self.rho * self.a**3
+
+    @property
+    def K(self) -> float:
+        """IL spring K = E*a [N/m]."""
+        return self.E * self.a
+
+    @property
+    def K_L(self) -> float:
+        """UL spring K_L = N_L*E*a [N/m]."""
+        return self.N_L * self.E * self.a
+
+    @property
+    def G(self) -> float:
+        """Shear modulus G = E/(2(1+nu)) [Pa]."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def K_T(self) -> float:
+        """IL-UL transverse spring K_T = G*a/N_L [N/m]."""
+        return self.G * self.a / self.N_L
+
+    @property
+    def K_d(self) -> float:
+        """Drive spring K_d = K/(2(1+nu)) [N/m]."""
+        return self.K / (2.0 * (1.0 + self.nu))
+
+    @property
+    def f0(self) -> float:
+        """f0 = a**2*tau_f [N]."""
+        return self.a**2 * self.tau_f
+
+    @property
+    def omega0(self) -> float:
+        """omega0 = sqrt(K/m) [1/s]."""
+        return math.sqrt(self.K / self.m)
+
+    @property
+    def n_contacts(self) -> int:
+        """N_c = round(theta*N)."""
+        return int(round(self.theta * self.N))
+
+    @property
+    def contact_law(self) -> ContactLaw:
+        return ContactLaw(epsilon=self.epsilon, f0=self.f0, c=self.c, m=self.m, eta_c=self.eta_c)
+
+    @property
+    def dt_unique_root_limit(self) -> float:
+        """Largest dt for which m(1+dt*eta_c)*u + dt*f(u) = r has one root for every contact."""
+        slope = self.contact_law.max_weakening_slope(self.v0 * 10.0 ** (-self.delta))
+        if slope == 0.0:
+            return math.inf
+        return self.m / max(slope - self.m * self.eta_c, 1e-300)
+
+    @property
+    def sample_steps(self) -> int:
+        """Time steps per output sample."""
+        return max(1, int(round(self.output_interval / self.dt)))
+
+    def with_updates(self, **updates: Any) -> "Config":
+        """A new validated config with some values replaced."""
+        return make_config({**self.model_dump(), **updates})
+
+    def to_toml(self) -> str:
+        """The config as flat TOML (None values omitted), readable by :func:`load_config`."""
+        lines = []
+        for key, value in self.model_dump().items():
+            if value is None:
+                continue
+            lines.append(f"{key} = {_toml_value(value)}")
+        return "\n".join(lines) + "\n"
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def _message(key: str, value: Any, allowed: str) -> str:
+    return f"config key '{key}' has value {value!r}; expected {allowed}"
+
+
+def _format_validation_error(err: ValidationError) -> str:
+    lines = []
+    for e in err.errors():
+        loc = ".".join(str(p) for p in e["loc"])
+        if e["type"] == "extra_forbidden":
+            known = ", ".join(sorted(Config.model_fields))
+            lines.append(f"unknown config key '{loc}' (value {e['input']!r}); known keys: {known}")
+        elif not loc:  # raised by the model validator: already a full message
+            lines.append(str(e["ctx"]["error"]) if "ctx" in e else e["msg"])
+        else:
+            lines.append(f"{_message(loc, e['input'], ALLOWED.get(loc, 'a valid value'))} ({e['msg']})")
+    return "invalid configuration:\n  " + "\n  ".join(lines)
+
+
+def _coerce_numbers(data: Mapping[str, Any]) -> dict[str, Any]:
+    """TOML integers are accepted for float keys; bools and strings are not numbers."""
+    out = dict(data)
+    for key, value in data.items():
+        field = Config.model_fields.get(key)
+        if field is not None and field.annotation in (float, float | None):
+            if isinstance(value, int) and not isinstance(value, bool):
+                out[key] = float(value)
+    return out
+
+
+def make_config(data: Mapping[str, Any] | None = None, *, legacy: bool = False, **kwargs: Any) -> Config:
+    """Build a validated :class:`Config` from a mapping and/or keyword arguments.
+
+    ``legacy=True`` (for stored files only) drops the keys of :data:`LEGACY_KEYS` that older
+    versions wrote; otherwise such a key is an error that says where it went.
+    """
+    merged = {**(data or {}), **kwargs}
+    for key, why in LEGACY_KEYS.items():
+        if key in merged:
+            if not legacy:
+                raise ConfigError(f"invalid configuration:\n  config key '{key}' (value {merged[key]!r}) is no longer "
+                                  f"accepted: {why}")
+            merged.pop(key)
+    try:
+        return Config(**_coerce_numbers(merged))
+    except ValidationError as err:
+        raise ConfigError(_format_validation_error(err)) from None
+
+
+def parse_override(item: str) -> tuple[str, Any]:
+    """Parse one ``name=value``; the value is read as a TOML literal, else as a bare string."""
+    if "=" not in item:
+        raise ConfigError(f"override {item!r} is not of the form name=value")
+    key, raw = item.split("=", 1)
+    key, raw = key.strip(), raw.strip()
+    if not key:
+        raise ConfigError(f"override {item!r} has an empty key")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key, value
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file into a dict, with a clear error for a missing or malformed file."""
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(f"config file {str(path)!r} does not exist") from None
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(f"config file {str(path)!r} is not valid TOML: {err}") from None
+
+
+def config_from_toml(text: str) -> Config:
+    """The config stored as TOML in a result file (a run's ``config`` attribute); keys that older
+    versions wrote (:data:`LEGACY_KEYS`) are dropped."""
+    return make_config(tomllib.loads(text), legacy=True)
+
+
+def load_config(path: str | Path | None = None, overrides: Sequence[str] = ()) -> Config:
+    """Defaults, then the TOML file at ``path`` (if any), then ``name=value`` overrides."""
+    data: dict[str, Any] = read_toml(path) if path is not None else {}
+    for item in overrides:
+        key, value = parse_override(item)
+        data[key] = value
+    return make_config(data)
+
+
+__all__ = ["ALLOWED", "LEGACY_KEYS", "Config", "ConfigError", "config_from_toml", "load_config", "make_config", "parse_override", "read_toml"]

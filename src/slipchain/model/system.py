@@ -1,0 +1,122 @@
+"""The two-chain slider of Fig. 4 plus one disorder realisation, built from an explicit seed.
+
+Interface layer (IL): N cubes of mass m, displacements x_i, velocities u_i.
+Upper layer (UL): N parallelepipeds of mass N_L*m, displacements X_i, velocities U_i.
+N_c = round(theta*N) distinct IL blocks carry one frictional contact each, with
+log10(v*_i) uniform on [log10 v0 - delta, log10 v0 + delta] (MODEL.md, "Frictional contacts").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import Config
+
+
+@dataclass(frozen=True)
+class System:
+    """A configuration plus its disorder realisation (contact sites and their v*)."""
+
+    config: Config
+    contact_sites: np.ndarray  # sorted IL indices carrying a contact, int64, shape (N_c,)
+    vstar: np.ndarray  # v*_i of each contact [m/s], shape (N_c,)
+
+    @property
+    def n_contacts(self) -> int:
+        return int(self.contact_sites.size)
+
+    @property
+    def theta_realised(self) -> float:
+        """theta = N_c/N, the realised contact fraction used in mu_star."""
+        return self.n_contacts / self.config.N
+
+    def steady_friction_per_block(self) -> float:
+        """(1/N) sum_contacts f(v_d, v*_i): the mean force per block in uniform sliding [N]."""
+        if self.n_contacts == 0:
+            return 0.0
+        f = self.config.contact_law.force(self.config.v_d, self.vstar)
+        return float(np.sum(f)) / self.config.N
+
+
+def build_system(config: Config, contact_sites: np.ndarray | None = None, vstar: np.ndarray | None = None) -> System:
+    """Draw the disorder from ``config.seed`` (or take explicit sites and v*, for tests).
+
+    The draw is: sites = rng.choice(N, N_c, replace=False), sorted; then
+    log10(v*) = log10(v0) + rng.uniform(-delta, delta, N_c), in site order, with
+    ``rng = numpy.random.default_rng(seed)``. Same config and seed, same realisation.
+    """
+    cfg = config
+    if contact_sites is None:
+        rng = np.random.default_rng(cfg.seed)
+        sites = np.sort(rng.choice(cfg.N, size=cfg.n_contacts, replace=False)).astype(np.int64)
+        vs = cfg.v0 * 10.0 ** rng.uniform(-cfg.delta, cfg.delta, size=sites.size)
+    else:
+        sites = np.asarray(contact_sites, dtype=np.int64)
+        vs = np.asarray(vstar, dtype=float) if vstar is not None else np.full(sites.size, cfg.v0)
+        if sites.ndim != 1 or vs.shape != sites.shape:
+            raise ValueError(f"contact_sites {sites.shape} and vstar {vs.shape} must be 1-d and equal in length")
+        if sites.size and (sites.min() < 0 or sites.max() >= cfg.N or np.unique(sites).size != sites.size):
+            raise ValueError(f"contact_sites must be distinct indices in [0, {cfg.N}); got {sites.tolist()}")
+        if np.any(vs <= 0) or not np.all(np.isfinite(vs)):
+            raise ValueError("vstar must be finite and > 0")
+        order = np.argsort(sites)
+        sites, vs = sites[order], vs[order]
+    return System(config=cfg, contact_sites=sites, vstar=vs)
+
+
+# Dead-weight drive: the force rises linearly over this fraction of the run (a heavy slider accepts
+# its load gradually; a step load makes the light model slider overshoot past the maximum of mu(v)).
+DEAD_WEIGHT_RAMP = 0.25
+
+
+def dead_weight_force(system: System) -> float:
+    """F_b = mu_a*epsilon*f0*theta (theta = N_c/N realised): the hanging weight's share per upper
+    block in the dead-weight drive (``config.dead_weight`` = mu_a); 0 with the spring drive."""
+    cfg = system.config
+    return float(cfg.dead_weight) * cfg.epsilon * cfg.f0 * system.theta_realised if cfg.dead_weight else 0.0
+
+
+def mu_star_norm(system: System) -> float:
+    """epsilon*f0*theta with the realised theta = N_c/N: f_d / this = mu_star (MODEL.md).
+
+    Without contacts mu_star is undefined; the series is then normalised by epsilon*f0 alone
+    (for the transient and error estimates) and mu_star is reported as NaN.
+    """
+    cfg = system.config
+    return cfg.epsilon * cfg.f0 * (system.theta_realised if system.n_contacts else 1.0)
+
+
+@dataclass
+class State:
+    """Dynamic state of one realisation: displacements from the lattice sites and velocities."""
+
+    x: np.ndarray  # IL displacements
+    u: np.ndarray  # IL velocities
+    X: np.ndarray  # UL displacements
+    U: np.ndarray  # UL velocities
+    step: int = 0  # time steps taken; t = step*dt
+
+    def copy(self) -> "State":
+        return State(self.x.copy(), self.u.copy(), self.X.copy(), self.U.copy(), self.step)
+
+
+def initial_state(system: System) -> State:
+    """The start chosen by ``config.start`` (MODEL.md, "Start and measurement").
+
+    rest: every block at rest at its site; the drive starts at 0 and moves at v_d.
+    steady: every block moves at v_d; X_i = -F/K_d and x_i = X_i - F/K_T with
+    F = (1/N) sum_contacts f(v_d, v*_i), so that drive and transverse springs carry the mean
+    steady-sliding friction per block.
+    """
+    cfg = system.config
+    n = cfg.N
+    if cfg.start == "rest":
+        zeros = np.zeros(n)
+        return State(zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy(), 0)
+    force = system.steady_friction_per_block()
+    X = np.full(n, -force / cfg.K_d)
+    x = X - force / cfg.K_T
+    v = np.full(n, cfg.v_d)
+    return State(x, v.copy(), X, v.copy(), 0)

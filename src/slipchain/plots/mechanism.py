@@ -1,0 +1,199 @@
+"""Figures of the mechanism and of sweeps beyond the paper: stick-slip, events and spectra; mu_star(v_d);
+the dead-weight drive; epsilon. Functions take Datasets and only draw.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..analysis.statistics import base_config, main_n, main_selection, seed_average
+from .common import ETA_STYLE, pyplot, save_figure
+
+
+def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str | os.PathLike) -> list[Path]:
+    """Stick-slip fraction versus theta, per-contact forces, event sizes and spectra (low and high theta).
+
+    ``stick_slip``: :func:`slipchain.analysis.mechanism.stick_slip_dataset` of a Fig. 6-like store;
+    ``analyses``: the stored analyses of :func:`slipchain.analysis.mechanism.mechanism_members`.
+    """
+    plt = pyplot()
+    paths: list[Path] = []
+    cfg = base_config(stick_slip)
+    sel = main_selection(stick_slip)
+    avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
+    if "N" in avg.dims:
+        avg = avg.sel(N=main_n(avg))
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    v_values = sorted(avg["v_d"].values.tolist(), reverse=True)
+    for ec in sorted(avg["eta_c"].values.tolist(), reverse=True) if "eta_c" in avg.dims else [None]:
+        factor = round(ec / cfg.omega0, 3) if ec is not None else cfg.eta_c / cfg.omega0
+        color, marker = ETA_STYLE.get(factor, ("tab:gray", "^"))
+        for vd in v_values:
+            cur = avg.sel(v_d=vd, **({} if ec is None else {"eta_c": ec})).dropna("theta", subset=["mu"])
+            filled = vd == max(v_values)
+            ax.errorbar(cur["theta"], cur["mu"], yerr=cur["err"], color=color, marker=marker,
+                        mfc=color if filled else "white", lw=0.8, capsize=2,
+                        label=rf"$\eta_c$ = {factor:g} $\omega_0$, $v_d$ = {vd:g} m/s")
+    ax.set_xlabel(r"$\theta$")
+    ax.set_ylabel("fraction of contacts that stick-slip")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_title("Stick-slip fraction versus load (slow fraction >= 5 % of the steady time)", fontsize=9)
+    ax.legend(fontsize=7, loc="center right")
+    paths += save_figure(fig, out, "mechanism_stick_slip")
+
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    v_top = max((a.attrs["v_d"] for a in analyses), default=0.0)
+    styles = {(a.attrs["v_d"], a.attrs["theta"]): ("-" if a.attrs["theta"] >= 0.5 else "--",
+                                                    "tab:red" if a.attrs["v_d"] == v_top else "tab:blue")
+              for a in analyses}
+    for a in analyses:
+        ls, color = styles[(a.attrs["v_d"], a.attrs["theta"])]
+        label = rf"$v_d$ = {a.attrs['v_d']:g}, $\theta$ = {a.attrs['theta']:.2g}"
+        # per-contact mean force against v*, and the isolated-contact value f(v_d, v*)
+        amp = a.attrs["amplitude"]
+        order = np.argsort(a["vstar"].values)
+        axes[0].plot(a["vstar"].values, a["force_mean"].values / amp, ls="none",
+                     marker="o" if a.attrs["theta"] >= 0.5 else "x", ms=3, color=color, alpha=0.6, label=label)
+        axes[0].plot(a["vstar"].values[order], a["force_single"].values[order] / amp, color=color, lw=0.8, ls=":")
+        # event sizes
+        if a.sizes.get("event", 0):
+            sizes = a["event_size"].values[~a["event_truncated"].values.astype(bool)]
+            if sizes.size:
+                bins = np.unique(np.round(np.geomspace(1, max(sizes.max(), 2) + 1, 20)))
+                h, e = np.histogram(sizes, bins=bins)
+                centers = np.sqrt(e[:-1] * e[1:])
+                density = h / np.diff(e) / a.attrs["duration"]
+                ok = h > 0
+                axes[1].plot(centers[ok], density[ok], marker="o", ls=ls, color=color,
+                             label=f"{label}: {sizes.size} events")
+        f = a["frequency"].values[1:]
+        axes[2].plot(f, a["psd_u"].values[1:], color=color, ls=ls, lw=1, label=label)
+    axes[0].set_xscale("log")
+    from matplotlib.ticker import NullFormatter
+
+    axes[0].xaxis.set_minor_formatter(NullFormatter())
+    axes[0].set_xlabel(r"$v^*_i$ (m/s)")
+    axes[0].set_ylabel(r"time-averaged contact force / $(\varepsilon f_0)$")
+    axes[0].set_title(r"per contact (dotted: isolated contact, $f(v_d, v^*_i)$)", fontsize=9)
+    axes[0].legend(fontsize=7)
+    axes[1].set_xscale("log")
+    axes[1].set_yscale("log")
+    axes[1].set_xlabel("event size (blocks)")
+    axes[1].set_ylabel("events per bin width per second")
+    axes[1].set_title("slip events (u > 2 v_d, connected in space and time)", fontsize=9)
+    axes[1].legend(fontsize=7)
+    axes[2].set_xscale("log")
+    axes[2].set_yscale("log")
+    axes[2].set_xlabel("frequency (Hz)")
+    axes[2].set_ylabel(r"PSD of $u_i$ ((m/s)$^2$/Hz), mean over blocks")
+    axes[2].set_title("interface velocity spectra (Welch, Hann)", fontsize=9)
+    axes[2].legend(fontsize=7)
+    paths += save_figure(fig, out, "mechanism_contacts_events_spectra")
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for a in analyses:
+        ls, color = styles[(a.attrs["v_d"], a.attrs["theta"])]
+        label = rf"$v_d$ = {a.attrs['v_d']:g}, $\theta$ = {a.attrs['theta']:.2g}"
+        f = a["frequency"].values[1:]
+        axes[0].plot(f, a["psd_f_d"].values[1:], color=color, ls=ls, lw=1, label=label)
+        axes[1].plot(f, a["psd_acoustic"].values[1:], color=color, ls=ls, lw=1, label=label)
+    for ax, what in zip(axes, (r"$f_d(t)$ (N$^2$/Hz)", r"$A(t) = \sum_i f(u_i, v^*_i)$ (N$^2$/Hz)")):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("PSD of " + what)
+        ax.legend(fontsize=7)
+    paths += save_figure(fig, out, "mechanism_force_spectra")
+    return paths
+
+
+def plot_velocity(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """mu_star versus v_d (log axis), one curve per theta: the model's Figs. 2 and 3."""
+    plt = pyplot()
+    sel = main_selection(ds)
+    avg = seed_average(ds.sel(sel) if sel else ds)
+    cfg = base_config(ds)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    other = [d for d in avg["mu"].dims if d not in ("v_d", "theta")]
+    sub = avg.isel({d: 0 for d in other}) if other else avg
+    thetas = sub["theta"].values.tolist() if "theta" in sub.dims else [None]
+    colors = plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))
+    for th, color in zip(thetas, colors):
+        cur = (sub.sel(theta=th) if th is not None else sub).dropna("v_d", subset=["mu"])
+        ax.errorbar(cur["v_d"], cur["mu"], yerr=cur["err"], color=color, marker="o", capsize=2,
+                    label=rf"$\theta$ = {th:g}" if th is not None else "model")
+    v = np.geomspace(float(avg["v_d"].min()), float(avg["v_d"].max()), 200)
+    ax.plot(v, cfg.contact_law.force(v, cfg.v0) / (cfg.epsilon * cfg.f0), color="0.5", ls=":",
+            label=r"$f(v, v_0)/(\varepsilon f_0)$")
+    ax.axvline(cfg.v0 * 10 ** -cfg.delta, color="0.7", lw=0.8, ls="--",
+               label=r"smallest $v^*$ = $v_0\,10^{-\delta}$")
+    ax.set_xscale("log")
+    ax.set_xlabel(r"$v_d$ (m/s)")
+    ax.set_ylabel(r"$\mu^*$")
+    ax.set_title(r"$\mu^*(v_d)$ at several loads" + (f" ({', '.join(f'{d} = {sub[d].item():g}' for d in other)})"
+                                                      if other else ""), fontsize=10)
+    ax.legend(fontsize=8)
+    return save_figure(fig, out, "velocity")
+
+
+def plot_dead_weight(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """mu(v) measured as the tester does: applied mu_a (dead_weight) against the steady velocity, per theta.
+
+    Runaway members are drawn at the right edge (open triangles) at their applied mu_a.
+    """
+    plt = pyplot()
+    if "dead_weight" not in ds.dims:
+        raise ValueError(f"the sweep has dimensions {list(ds.dims)}; a dead-weight figure needs dead_weight")
+    cfg = base_config(ds)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    other = [d for d in ds.dims if d not in ("dead_weight", "theta")]
+    sub = ds.isel({d: 0 for d in other}) if other else ds
+    thetas = sub["theta"].values.tolist() if "theta" in sub.dims else [None]
+    colors = plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))
+    v_ok = ds["velocity"].values[np.isfinite(ds["velocity"].values)]
+    v_edge = v_ok.max() * 3 if v_ok.size else 1.0
+    for th, color in zip(thetas, colors):
+        cur = sub.sel(theta=th) if th is not None else sub
+        mu = cur["dead_weight"].values
+        v, e = cur["velocity"].values, cur["velocity_sem"].values
+        ok = np.isfinite(v)
+        label = rf"$\theta$ = {th:g}" if th is not None else "model"
+        if ok.any():
+            ax.errorbar(v[ok], mu[ok], xerr=e[ok], color=color, marker="o", capsize=2, label=label + ": steady")
+        run = cur["velocity_status"].values == "runaway"
+        if run.any():
+            ax.plot(np.full(run.sum(), v_edge), mu[run], marker=">", ls="none", color=color, mfc="white",
+                    label=label + ": runaway")
+    vv = np.geomspace(max(v_ok.min() / 3, 1e-9) if v_ok.size else 1e-7, v_edge, 200)
+    ax.plot(vv, cfg.contact_law.force(vv, cfg.v0) / (cfg.epsilon * cfg.f0), color="0.5", ls=":",
+            label=r"$f(v, v_0)/(\varepsilon f_0)$")
+    ax.set_xscale("log")
+    ax.set_xlabel("steady velocity (m/s)")
+    ax.set_ylabel(r"applied $\mu^*$ (dead weight)")
+    ax.set_title("Dead-weight drive: mu(v) measured as the tester does", fontsize=10)
+    ax.legend(fontsize=7)
+    return save_figure(fig, out, "dead_weight")
+
+
+def plot_epsilon(avg: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """mu_star versus theta for each epsilon (the contact-force scale of eq. 1), from
+    :func:`slipchain.analysis.statistics.epsilon_table`."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    colors = plt.cm.plasma(np.linspace(0, 0.8, avg.sizes["epsilon"]))
+    for eps, color in zip(avg["epsilon"].values, colors):
+        cur = avg.sel(epsilon=eps).dropna("theta", subset=["mu"])
+        ax.errorbar(cur["theta"], cur["mu"], yerr=cur["err"], color=color, marker="o", capsize=2,
+                    label=rf"$\varepsilon$ = {eps:g} (dt = {float(cur['dt_used']) if 'dt_used' in cur.coords else 0:g} s)")
+    ax.set_xlabel(r"$\theta$")
+    ax.set_ylabel(r"$\mu^*$")
+    ax.set_title(r"The load effect for several $\varepsilon$ ($v_d = v_0$)", fontsize=10)
+    ax.legend(fontsize=8)
+    return save_figure(fig, out, "epsilon")
+
+
+__all__ = ["plot_dead_weight", "plot_epsilon", "plot_mechanism", "plot_velocity"]

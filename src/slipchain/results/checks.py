@@ -1,0 +1,66 @@
+"""Physics checks after a run: energy balance and the slider following the drive.
+
+Energy balance: the stored energy E = kinetic + elastic (all springs, drive springs included)
+changes by the work of the drive point minus what damping and contacts dissipate,
+    E(t) - E(0) = W_drive + W_damping + W_contacts     (the last two are negative).
+The scheme is first order, so the balance holds to O(dt) relative to the stored energy; over a
+long run it is a small fraction of the drive work. Tolerance: ENERGY_RTOL of W_drive.
+
+Displacement: in steady sliding the mean interface-layer velocity over the steady window
+equals v_d within DISPLACEMENT_RTOL (the spring stretch can only fluctuate, not grow).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.system import State, System
+
+ENERGY_RTOL = 2e-3
+DISPLACEMENT_RTOL = 0.1
+
+
+def stored_energy(system: System, state: State) -> float:
+    """Kinetic plus elastic energy of one realisation [J]."""
+    cfg = system.config
+    x, u, X, U = state.x, state.u, state.X, state.U
+    drive = cfg.v_d * state.step * cfg.dt
+    kinetic = 0.5 * cfg.m * np.sum(u * u) + 0.5 * cfg.N_L * cfg.m * np.sum(U * U)
+    elastic = (
+        0.5 * cfg.K * np.sum((np.roll(x, -1) - x) ** 2)
+        + 0.5 * cfg.K_L * np.sum((np.roll(X, -1) - X) ** 2)
+        + 0.5 * cfg.K_T * np.sum((X - x) ** 2)
+        + (0.5 * cfg.K_d * np.sum((drive - X) ** 2) if cfg.dead_weight is None else 0.0)  # no drive springs
+    )
+    return float(kinetic + elastic)
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    name: str
+    passed: bool
+    value: float
+    tolerance: float
+    message: str
+
+
+def energy_check(delta_e: float, w_drive: float, w_damp: float, w_contact: float, rtol: float = ENERGY_RTOL) -> CheckResult:
+    residual = delta_e - (w_drive + w_damp + w_contact)
+    scale = max(abs(w_drive), abs(delta_e), 1e-300)
+    rel = abs(residual) / scale
+    return CheckResult(
+        "energy_balance", bool(rel <= rtol), float(rel), rtol,
+        f"energy balance: |dE - (W_drive + W_damp + W_contact)| / W_drive = {rel:.2e} (tolerance {rtol:g}); "
+        f"dE = {delta_e:.4e} J, W_drive = {w_drive:.4e} J, W_damp = {w_damp:.4e} J, W_contact = {w_contact:.4e} J",
+    )
+
+
+def displacement_check(mean_velocity: float, v_d: float, rtol: float = DISPLACEMENT_RTOL) -> CheckResult:
+    rel = abs(mean_velocity / v_d - 1.0)
+    return CheckResult(
+        "slider_follows_drive", bool(rel <= rtol), float(rel), rtol,
+        f"steady mean interface velocity {mean_velocity:.4e} m/s vs v_d = {v_d:.4e} m/s "
+        f"(relative difference {rel:.2e}, tolerance {rtol:g})",
+    )

@@ -1,0 +1,317 @@
+"""The run schema: the status of a run, the run Dataset's variables and attributes, and its assembly.
+
+One table (:data:`RUN_VARIABLES`, :data:`RUN_ATTRIBUTES`) says what a run's ``xarray.Dataset``
+holds; the assembly (:func:`assemble_run`), the sweep store's per-member summary
+(:data:`SWEEP_VARIABLES`), the CLI's summary (:data:`SUMMARY_KEYS`) and the docs
+(:func:`schema_markdown`, docs/run-schema.md) all read it.
+
+mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (MODEL.md, "Start and measurement"),
+averaged over the steady window found by MSER (:mod:`slipchain.results.observables`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .._version import __version__
+from ..model.system import DEAD_WEIGHT_RAMP, State, System, dead_weight_force, mu_star_norm
+from .checks import CheckResult, displacement_check, energy_check, stored_energy
+from .observables import SLOW_FRACTION, steady_estimate, window_velocity
+from .velocity import VelocityStatus, steady_velocity
+
+
+class Status(StrEnum):
+    """Status of a run (the first four) or of a point of a sweep grid (``missing``, ``absent``).
+
+    str-valued: files hold the plain words, and ``ds.attrs["status"] == Status.COMPLETED`` works
+    on files written before the enum existed.
+    """
+
+    COMPLETED = "completed"  # ran to its end; every physics check passed
+    DIVERGED = "diverged"  # a non-finite state, or a failed physics check (the message names it)
+    INTERRUPTED = "interrupted"  # stopped by the user (Ctrl-C); what was simulated is kept
+    ERROR = "error"  # the run raised (a sweep task that failed; the message holds the exception)
+    MISSING = "missing"  # sweep grid: a member not run yet
+    ABSENT = "absent"  # sweep grid: a combination that no grid of the sweep contains
+
+
+# A dead-weight run faster than this times v0*10**delta has left the rising branch of mu(v).
+RUNAWAY_FACTOR = 10.0
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One variable or attribute of the run Dataset.
+
+    ``dims``: the dimension of a variable ('' for an attribute); ``summary``: shown by the CLI's
+    summary (and ``--json``); ``sweep``: the name under which the sweep store gathers this
+    attribute into its per-member grid ('' if it does not).
+    """
+
+    name: str
+    dims: str
+    units: str
+    meaning: str
+    summary: bool = False
+    sweep: str = ""
+
+
+RUN_VARIABLES: tuple[Entry, ...] = (
+    Entry("f_d", "time", "N", "driving force per block f_d, mean over the output interval ending at time"),
+    Entry("x_mean", "time", "m", "mean interface-layer displacement"),
+    Entry("X_mean", "time", "m", "mean upper-layer displacement"),
+    Entry("contact_site", "contact", "", "interface block carrying the contact"),
+    Entry("vstar", "contact", "m/s", "contact velocity scale v*_i"),
+    Entry("contact_force_mean", "contact", "N", "time-averaged contact force, steady window"),
+    Entry("contact_velocity_mean", "contact", "m/s", "time-averaged contact velocity, steady window"),
+    Entry("contact_velocity_std", "contact", "m/s", "standard deviation of the contact velocity, steady window"),
+    Entry("contact_slow_fraction", "contact", "", f"fraction of steady steps with |u| < {SLOW_FRACTION:g} v_d"),
+    Entry("x", "block", "m", "final interface-layer displacements"),
+    Entry("u", "block", "m/s", "final interface-layer velocities"),
+    Entry("X", "block", "m", "final upper-layer displacements"),
+    Entry("U", "block", "m/s", "final upper-layer velocities"),
+)
+
+RUN_ATTRIBUTES: tuple[Entry, ...] = (
+    Entry("title", "", "", "what the file is"),
+    Entry("slipchain_version", "", "", "package version that wrote the run"),
+    Entry("status", "", "", "completed, diverged, interrupted or error (Status)", summary=True),
+    Entry("message", "", "", "why a run did not complete, or a note (t_max reached)", summary=True),
+    Entry("config", "", "", "the full config as TOML"),
+    Entry("seed", "", "", "seed of the disorder", summary=True),
+    Entry("mu_star", "", "", "mu_star = <f_d>/(epsilon f0 theta), steady window", summary=True, sweep="mu_star"),
+    Entry("mu_star_sem", "", "", "standard error of mu_star (batch means over time)", summary=True,
+          sweep="mu_star_sem"),
+    Entry("t_transient", "", "s", "loading transient excluded from the average", summary=True, sweep="t_transient"),
+    Entry("t_steady", "", "s", "steady window", sweep="t_steady"),
+    Entry("sem_target_reached", "", "", "1 if the automatic length reached sem_target"),
+    Entry("theta", "", "", "realised theta = N_c/N", summary=True, sweep="theta_realised"),
+    Entry("n_contacts", "", "", "number of contacts N_c", summary=True, sweep="n_contacts"),
+    Entry("N", "", "", "blocks per chain", summary=True),
+    Entry("v_d", "", "m/s", "drive velocity", summary=True),
+    Entry("eta_c", "", "1/s", "contact damping", summary=True),
+    Entry("epsilon", "", "", "contact-force scale", summary=True),
+    Entry("dt", "", "s", "time step", summary=True),
+    Entry("t_total", "", "s", "simulated time", summary=True, sweep="t_total"),
+    Entry("steps", "", "", "time steps", summary=True, sweep="steps"),
+    Entry("wall_time_s", "", "s", "wall time of the run", summary=True, sweep="wall_time_s"),
+    Entry("backend", "", "", "where the run was computed (cpu or gpu); not part of a member's identity"),
+    Entry("mu_star_norm", "", "N", "epsilon f0 theta, the unit of mu_star"),
+    Entry("W_drive", "", "J", "work of the drive"),
+    Entry("W_damping", "", "J", "work of the inter-block damping (negative)"),
+    Entry("W_contacts", "", "J", "work of the contact forces (negative)"),
+    Entry("check_<name>", "", "", "value of each physics check (energy_balance, slider_follows_drive)"),
+    Entry("check_<name>_passed", "", "", "1 if that check passed"),
+    Entry("drive", "", "", "dead-weight drive only: 'dead-weight'"),
+    Entry("dead_weight_force", "", "N", "dead-weight drive: the force F_b on every upper block"),
+    Entry("velocity", "", "m/s", "dead-weight drive: steady velocity (NaN otherwise or if runaway)", summary=True,
+          sweep="velocity"),
+    Entry("velocity_sem", "", "m/s", "dead-weight drive: standard error of the velocity", summary=True,
+          sweep="velocity_sem"),
+    Entry("velocity_status", "", "", "dead-weight drive: ok, runaway or no-steady (VelocityStatus)", summary=True),
+    Entry("velocity_reason", "", "", "dead-weight drive: why the velocity is not ok"),
+)
+
+_VARIABLES = {e.name: e for e in RUN_VARIABLES}
+
+# Gathered by the sweep store into one grid per name: name -> (attribute of the member file, meaning).
+SWEEP_VARIABLES: dict[str, tuple[str, str]] = {
+    e.sweep: (e.name, e.meaning + (f", {e.units}" if e.units else "")) for e in RUN_ATTRIBUTES if e.sweep
+}
+# The run's headline numbers (the CLI's summary and --json), in this order.
+SUMMARY_KEYS: tuple[str, ...] = tuple(e.name for e in RUN_ATTRIBUTES if e.summary)
+
+
+def schema_markdown() -> str:
+    """The run schema as Markdown tables (docs/run-schema.md is this text)."""
+    lines = ["# The run Dataset", "",
+             "Generated from `slipchain.results.schema` (`python -m slipchain.results.schema`); a test keeps "
+             "this file equal to the code.", "",
+             "## Variables", "", "| name | dimension | units | meaning |", "|---|---|---|---|"]
+    lines += [f"| `{e.name}` | {e.dims} | {e.units} | {e.meaning} |" for e in RUN_VARIABLES]
+    lines += ["", "## Attributes", "",
+              "| name | units | meaning | CLI summary | sweep grid variable |", "|---|---|---|---|---|"]
+    lines += [f"| `{e.name}` | {e.units} | {e.meaning} | {'yes' if e.summary else ''} | "
+              f"{('`' + e.sweep + '`') if e.sweep else ''} |" for e in RUN_ATTRIBUTES]
+    lines += ["", "## Status", "", "| value | meaning |", "|---|---|"]
+    lines += [f"| `{s.value}` | {_STATUS_MEANING[s]} |" for s in Status]
+    return "\n".join(lines) + "\n"
+
+
+_STATUS_MEANING = {
+    Status.COMPLETED: "ran to its end; every physics check passed",
+    Status.DIVERGED: "a non-finite state, or a failed physics check (the message names it)",
+    Status.INTERRUPTED: "stopped by the user; what was simulated is kept",
+    Status.ERROR: "the run raised (a failed sweep task; the message holds the exception)",
+    Status.MISSING: "sweep grid: a member not run yet",
+    Status.ABSENT: "sweep grid: a combination that no grid of the sweep contains",
+}
+
+
+@dataclass
+class Recording:
+    """What the engine recorded for one realisation, in plain named arrays.
+
+    Per output sample k (ending at (k+1)*interval): ``f_d`` mean driving force per block over the
+    sample, ``x_mean``/``X_mean`` mean layer displacements at its end. Per chunk c (starting at
+    sample ``chunk_starts[c]``, ``chunk_samples[c]`` samples long): ``contact_sums[c]``, an
+    (N_c, 4) array of per-contact sums over its steps (force, velocity, velocity**2, slow steps).
+    ``works``: (W_drive, W_damping, W_contacts) [J].
+    """
+
+    f_d: np.ndarray
+    x_mean: np.ndarray
+    X_mean: np.ndarray
+    chunk_starts: list[int]
+    chunk_samples: list[int]
+    contact_sums: list[np.ndarray]
+    works: np.ndarray
+
+
+def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float, e0: float, interval: float,
+                 steps_per_sample: int, status: Status, message: str, sem_reached: bool, wall: float,
+                 backend: str) -> xr.Dataset:
+    """The run Dataset (the schema above) from a recording: MSER transient, mu_star and its error,
+    per-contact steady averages, the physics checks after the run (a failed check turns a
+    completed run into ``diverged``), and the dead-weight velocity."""
+    cfg = system.config
+    norm = mu_star_norm(system)
+    fd = rec.f_d
+    n = fd.size
+    est = steady_estimate(fd / norm) if n else None
+    start = est.start if est else 0
+    checks: list[CheckResult] = []
+    if status != Status.DIVERGED and n:
+        checks.append(energy_check(stored_energy(system, final) - e0, *rec.works))
+        if est is not None and est.n_samples >= 2 and cfg.dead_weight is None:
+            checks.append(displacement_check(window_velocity(rec.x_mean, start, x0_mean, interval), cfg.v_d))
+        failed = [c for c in checks if not c.passed]
+        if failed and status == Status.COMPLETED:
+            status = Status.DIVERGED
+            message = "physics check failed at the end of the run (t = %.6e s): %s" % (
+                n * interval, "; ".join(c.message for c in failed))
+
+    # Per-contact averages over the chunks that lie wholly in the steady window.
+    sums = np.zeros((system.n_contacts, 4))
+    steady_steps = 0
+    for s0, ns, cs in zip(rec.chunk_starts, rec.chunk_samples, rec.contact_sums):
+        if s0 >= start:
+            sums += cs
+            steady_steps += ns * steps_per_sample
+    with np.errstate(invalid="ignore", divide="ignore"):
+        denom = steady_steps if steady_steps else np.nan
+        f_mean = sums[:, 0] / denom
+        u_mean = sums[:, 1] / denom
+        u_std = np.sqrt(np.maximum(sums[:, 2] / denom - u_mean**2, 0.0))
+        slow = sums[:, 3] / denom
+
+    time = (np.arange(n) + 1) * interval
+    values = {"f_d": fd, "x_mean": rec.x_mean, "X_mean": rec.X_mean, "contact_site": system.contact_sites,
+              "vstar": system.vstar, "contact_force_mean": f_mean, "contact_velocity_mean": u_mean,
+              "contact_velocity_std": u_std, "contact_slow_fraction": slow, "x": final.x, "u": final.u, "X": final.X,
+              "U": final.U}
+    ds = xr.Dataset(
+        data_vars={k: (_VARIABLES[k].dims, v, _var_attrs(_VARIABLES[k])) for k, v in values.items()},
+        coords={"time": ("time", time, {"units": "s"}), "contact": np.arange(system.n_contacts), "block": np.arange(cfg.N)},
+    )
+    has_contacts = est is not None and system.n_contacts > 0
+    attrs: dict[str, Any] = {
+        "title": "slipchain two-chain friction model run",
+        "slipchain_version": __version__,
+        "status": Status(status).value,
+        "message": message,
+        "config": cfg.to_toml(),
+        "seed": cfg.seed,
+        "mu_star": est.mean if has_contacts else np.nan,
+        "mu_star_sem": est.sem if has_contacts else np.nan,
+        "t_transient": start * interval,
+        "t_steady": (n - start) * interval,
+        "sem_target_reached": int(sem_reached),
+        "theta": system.theta_realised,
+        "n_contacts": system.n_contacts,
+        "N": cfg.N,
+        "v_d": cfg.v_d,
+        "eta_c": cfg.eta_c,
+        "epsilon": cfg.epsilon,
+        "dt": cfg.dt,
+        "t_total": n * interval,
+        "steps": int(final.step),
+        "wall_time_s": wall,
+        "backend": backend,
+        "mu_star_norm": norm,
+        "W_drive": rec.works[0],
+        "W_damping": rec.works[1],
+        "W_contacts": rec.works[2],
+    }
+    if cfg.dead_weight is not None:
+        after = time > DEAD_WEIGHT_RAMP * time[-1] if n else np.zeros(0, bool)
+        attrs.update(dead_weight_attrs(system, time[after], rec.X_mean[after]))
+    for c in checks:
+        attrs[f"check_{c.name}"] = c.value
+        attrs[f"check_{c.name}_passed"] = int(c.passed)
+    ds.attrs.update(attrs)
+    return ds
+
+
+def _var_attrs(e: Entry) -> dict[str, str]:
+    out = {"units": e.units} if e.units else {}
+    out["long_name"] = e.meaning
+    return out
+
+
+def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> dict[str, Any]:
+    """Dead-weight drive: the applied mu_star, and the velocity measured from the slider's position
+    trace <X>(t) after the force ramp, exactly as the friction tester measures it
+    (:func:`slipchain.results.velocity.steady_velocity`).
+
+    ``runaway``: still accelerating at the end, or sliding faster than RUNAWAY_FACTOR*v0*10**delta:
+    above the maximum of mu(v) the model slider does not stop accelerating until the contact
+    damping m*eta_c*u alone balances the load, at about a metre per second (with eta_c = 0 it never
+    stops)."""
+    cfg = system.config
+    fit = steady_velocity(time, X_mean) if time.size >= 20 else None
+    status, reason = (fit.status, fit.reason) if fit else (VelocityStatus.NO_STEADY, "fewer than 20 samples after the ramp")
+    v_branch = RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta  # far above the last contact's maximum
+    if fit and fit.status == VelocityStatus.OK and fit.velocity > v_branch:
+        status = VelocityStatus.RUNAWAY
+        reason = (f"runaway: the slider left the rising branch of mu(v) and slides at {fit.velocity:.3g} m/s "
+                  f"(> {RUNAWAY_FACTOR:g} v0 10**delta = {v_branch:.3g} m/s), where only the contact damping "
+                  "m eta_c u holds it")
+    ok = status == VelocityStatus.OK
+    return {
+        "drive": "dead-weight",
+        "mu_star": float(cfg.dead_weight),
+        "mu_star_sem": 0.0,
+        "dead_weight_force": dead_weight_force(system),
+        "velocity": fit.velocity if ok else np.nan,
+        "velocity_sem": fit.sem if ok else np.nan,
+        "velocity_status": VelocityStatus(status).value,
+        "velocity_reason": reason,
+    }
+
+
+def summary(ds: xr.Dataset) -> dict[str, Any]:
+    """The run's headline numbers (:data:`SUMMARY_KEYS`) as plain Python values (the CLI's --json)."""
+    out: dict[str, Any] = {}
+    for key in SUMMARY_KEYS:
+        if key.startswith("velocity") and key not in ds.attrs:
+            continue
+        v = ds.attrs.get(key)
+        if isinstance(v, np.generic):
+            v = v.item()
+        if isinstance(v, float) and not np.isfinite(v):
+            v = None
+        out[key] = v
+    return out
+
+
+__all__ = ["RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
+           "Status", "assemble_run", "dead_weight_attrs", "schema_markdown", "summary"]
+
+if __name__ == "__main__":  # pragma: no cover - regenerates docs/run-schema.md
+    print(schema_markdown(), end="")

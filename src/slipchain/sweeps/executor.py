@@ -1,0 +1,248 @@
+"""Run a sweep on Dask: every member (or batch of members) a task, every finished member written
+to the store at once.
+
+On the CPU each task is one member; with ``backend = 'gpu'`` a task is a batch of up to 256
+members of equal N, dt and output interval, advanced together by one kernel launch
+(:func:`slipchain.engine.simulate.simulate_batch`); its members are written one by one when it returns.
+
+The driver (this process) submits the members that the store does not hold yet, in order of
+decreasing expected cost (large ``N*theta`` first, so the long runs do not end up alone at the
+tail), and writes each result the moment it arrives (:meth:`slipchain.sweeps.store.Store.write_member`,
+atomic). What survives what:
+
+* the driver is killed (even SIGKILL): every member written so far stays; the ones in flight are
+  lost and rerun next time; running the same command again resumes.
+* a worker dies mid-task: the Dask scheduler reschedules its tasks on the other workers (at most
+  ``distributed.scheduler.allowed-failures`` times, default 3, then the member fails with
+  ``KilledWorker`` and the reason is recorded).
+* a member raises or diverges: it is written to ``failed/`` with its reason; the others go on.
+
+Default scheduler: a ``LocalCluster`` of one single-threaded worker process per core on
+loopback. ``scheduler="tcp://host:8786"`` uses an existing cluster instead (for example one
+started by dask-jobqueue on SLURM); workers then only need slipchain installed, not the store:
+results travel back to the driver, which alone writes the store.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterator
+
+import xarray as xr
+
+from .._version import __version__
+from ..engine.backends import BackendName
+from ..engine.simulate import simulate_batch
+from ..model.config import Config
+from ..model.system import build_system
+from ..results.schema import Status
+from .definition import Member, SweepDefinition
+from .store import Store
+
+ERROR = Status.ERROR.value
+GPU_BATCH = 256  # members per task with the GPU backend
+
+
+def run_members(configs: list[Config], backend: str = BackendName.CPU) -> list[xr.Dataset]:
+    """Sweep members (executed on a worker): build the systems, simulate them as one batch (one
+    kernel launch advances all of them; a batch of one is a plain run), return the Datasets."""
+    return simulate_batch([build_system(c) for c in configs], backend=str(backend), progress=False)
+
+
+def batches(members: list[Member], size: int) -> list[list[Member]]:
+    """Members grouped for :func:`run_members`: equal N, dt and output interval, at most ``size`` each,
+    similar expected cost together (the input order, by decreasing cost, is kept)."""
+    groups: dict[tuple, list[Member]] = {}
+    for m in members:
+        c = m.config
+        groups.setdefault((c.N, c.dt, c.sample_steps), []).append(m)
+    out = []
+    for g in groups.values():
+        out += [g[i:i + size] for i in range(0, len(g), size)]
+    return sorted(out, key=lambda b: -max(expected_cost(m) for m in b))
+
+
+def error_dataset(member: Member, exc: BaseException) -> xr.Dataset:
+    """A placeholder result for a member whose task raised: status ``error`` and the reason."""
+    return xr.Dataset(attrs={
+        "status": ERROR,
+        "message": f"{type(exc).__name__}: {exc}".strip(),
+        "config": member.config.to_toml(),
+        "seed": member.config.seed,
+        "slipchain_version": __version__,
+    })
+
+
+def expected_cost(member: Member) -> float:
+    """Relative run time: blocks times contacts per block, times steps per simulated second."""
+    c = member.config
+    return c.N * (c.theta + 0.05) * (2e-8 / c.dt)
+
+
+@dataclass
+class Outcome:
+    member: Member
+    status: str
+    message: str
+    mu_star: float
+    mu_star_sem: float
+    wall_time_s: float
+
+
+@dataclass
+class SweepReport:
+    """What one invocation of :func:`run_sweep` did."""
+
+    store: Path
+    total: int
+    skipped: list[Member] = field(default_factory=list)
+    ran: list[Outcome] = field(default_factory=list)
+    interrupted: bool = False
+    wall_time_s: float = 0.0
+
+    @property
+    def failed(self) -> list[Outcome]:
+        return [o for o in self.ran if o.status != Status.COMPLETED]
+
+    @property
+    def not_run(self) -> int:
+        return self.total - len(self.skipped) - len(self.ran)
+
+    @property
+    def ok(self) -> bool:
+        return not self.interrupted and not self.failed and self.not_run == 0
+
+
+def default_workers() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@contextmanager
+def dask_client(scheduler: str | None = None, n_workers: int | None = None) -> Iterator["object"]:
+    """A ``distributed.Client``: to ``scheduler`` if given, else to a new local cluster."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        with Client(scheduler) as client:
+            yield client
+        return
+    with LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1, processes=True,
+                      host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR) as cluster:
+        with Client(cluster) as client:
+            yield client
+
+
+def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, scheduler: str | None = None,
+              n_workers: int | None = None, client: object | None = None, progress: bool | None = None,
+              backend: str | BackendName = BackendName.CPU, batch_size: int | None = None) -> SweepReport:
+    """Run the members of ``sweep`` that ``store`` does not hold yet; write each as it finishes.
+
+    ``client``: an existing ``distributed.Client`` to use (tests); else ``scheduler`` (an
+    address) or a new local cluster of ``n_workers`` processes (default: one per core; one with
+    ``backend = 'gpu'``). ``backend``: where the members are computed ('cpu', 'gpu', 'auto'; not
+    part of their identity, so CPU and GPU members share a store). ``batch_size``: members per task, advanced together by one kernel launch
+    (:func:`run_members`); default 1 on the CPU, 256 with ``backend = 'gpu'``.
+    """
+    if backend == "gpu":
+        batch_size = batch_size or GPU_BATCH
+        n_workers = n_workers or 1
+    st = store if isinstance(store, Store) else Store.open(store, sweep)
+    t0 = time.perf_counter()
+    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    done = st.completed_ids()
+    report = SweepReport(store=st.path, total=len(st.sweep.members),
+                         skipped=[m for m in st.sweep.members if m.id in done])
+    pending = sorted(st.pending(), key=expected_cost, reverse=True)
+    bar = _SweepProgress(progress, len(pending), len(report.skipped))
+    try:
+        if pending:
+            groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
+            if client is not None:
+                _execute(client, st, groups, report, bar, backend)
+            else:
+                with dask_client(scheduler, n_workers) as c:
+                    _execute(c, st, groups, report, bar, backend)
+    except KeyboardInterrupt:
+        report.interrupted = True
+    finally:
+        bar.close()
+        report.wall_time_s = time.perf_counter() - t0
+        st.write_index()
+        st.log_invocation({"started": started, "wall_time_s": report.wall_time_s, "ran": len(report.ran),
+                           "failed": len(report.failed), "skipped": len(report.skipped), "total": report.total,
+                           "interrupted": report.interrupted, "scheduler": scheduler or ("client" if client else "local"),
+                           "n_workers": n_workers or (None if scheduler or client else default_workers()),
+                           "backend": str(backend), "slipchain_version": __version__})
+    return report
+
+
+def _execute(client, st: Store, groups: list[list[Member]], report: SweepReport, bar: "_SweepProgress",
+             backend: str) -> None:
+    from distributed import as_completed
+
+    futures = {}
+    for g in groups:
+        fut = client.submit(run_members, [m.config for m in g], str(backend), key=f"slipchain-{g[0].id}-{len(g)}",
+                            priority=max(expected_cost(m) for m in g), pure=False)
+        futures[fut] = g
+    try:
+        for fut in as_completed(list(futures)):
+            g = futures.pop(fut)
+            try:
+                results = fut.result()
+            except Exception as exc:  # the task raised, or its workers kept dying (KilledWorker)
+                results = [error_dataset(m, exc) for m in g]
+            for m, ds in zip(g, results):
+                st.write_member(m, ds)
+                a = ds.attrs
+                report.ran.append(Outcome(m, str(a.get("status", ERROR)), str(a.get("message", "")),
+                                          float(a.get("mu_star", float("nan"))),
+                                          float(a.get("mu_star_sem", float("nan"))),
+                                          float(a.get("wall_time_s", float("nan")))))
+                bar.advance(report)
+            fut.release()
+    finally:
+        if futures:  # interrupted: drop the tasks still queued or running
+            client.cancel(list(futures))
+
+
+class _SweepProgress:
+    """Rich progress bar with counts and an ETA (on a terminal by default)."""
+
+    def __init__(self, enabled: bool | None, total: int, skipped: int):
+        self.enabled = (sys.stderr.isatty() if enabled is None else enabled) and total > 0
+        self._bar = None
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn,
+                                       TimeRemainingColumn)
+
+            self._bar = Progress(TextColumn("[bold]slipchain sweep"), BarColumn(), MofNCompleteColumn(),
+                                 TextColumn("{task.fields[info]}"), TimeElapsedColumn(), TextColumn("ETA"),
+                                 TimeRemainingColumn(), console=Console(stderr=True))
+            self._bar.start()
+            self._task = self._bar.add_task("sweep", total=total, info=f"skipped {skipped} (in store)")
+            self._skipped = skipped
+
+    def advance(self, report: SweepReport) -> None:
+        if self._bar is not None:
+            n_failed = len(report.failed)
+            self._bar.update(self._task, advance=1,
+                             info=f"completed {len(report.ran) - n_failed}, failed {n_failed}, skipped {self._skipped}")
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+
+
+__all__ = ["GPU_BATCH", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
+           "run_sweep"]

@@ -1,0 +1,255 @@
+"""A sweep store that never loses work: one NetCDF file per finished member, plus an index.
+
+Layout of a store directory::
+
+    sweep.toml          the full sweep definition (written once, first); identifies the sweep
+    members/<id>.nc     each completed member: the run's Dataset (time series, per-contact data,
+                        final state, config TOML, seed, status, package version in its attrs)
+    failed/<id>.nc      the latest failed attempt of a member (status diverged or error, with
+                        the reason in ``message``); rerun on resume, removed once it completes
+    index.csv           one row per member (point, status, mu_star, ...): a readable summary,
+                        rebuilt from the files above, never the source of truth
+    invocations.jsonl   one line per sweep invocation (start, wall time, counts): a log
+
+Why per-member files (and not one Zarr array): every member is written exactly once, by one
+process, with :func:`slipchain.results.io.write_dataset` (temporary file + ``os.replace``), so a crash
+at any moment leaves each member either absent or complete; no two writers ever touch the same
+file or chunk; members of different lengths (automatic run length) need no padding; and the
+directory listing alone says what is done, so resuming needs no bookkeeping that a kill could
+leave inconsistent. ``<id>`` is the hash of the member's full config (:func:`slipchain.sweeps.definition.member_id`).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import h5netcdf
+import numpy as np
+import xarray as xr
+
+from ..results.io import read_dataset, write_dataset, write_text_atomic
+from ..results.schema import SWEEP_VARIABLES, Status
+from .definition import Member, SweepDefinition, SweepError, load_sweep_definition
+
+DEFINITION = "sweep.toml"
+MEMBERS = "members"
+FAILED = "failed"
+INDEX = "index.csv"
+LOG = "invocations.jsonl"
+
+# Per-member numbers gathered into the sweep Dataset (from the run schema): variable -> (attr, meaning).
+SUMMARY_VARS = SWEEP_VARIABLES
+ABSENT, MISSING = Status.ABSENT.value, Status.MISSING.value
+
+
+class Store:
+    """A directory holding the members of one sweep (see the module docstring)."""
+
+    def __init__(self, path: str | os.PathLike, sweep: SweepDefinition):
+        self.path = Path(path)
+        self.sweep = sweep
+
+    # --- opening -------------------------------------------------------------------------
+    @classmethod
+    def open(cls, path: str | os.PathLike, sweep: SweepDefinition | None = None) -> "Store":
+        """Open the store at ``path``; with ``sweep``, create it if needed and check it matches.
+
+        Refuses (SweepError) a directory that holds something else, and a store written by a
+        different sweep definition, naming what differs.
+        """
+        path = Path(path)
+        definition = path / DEFINITION
+        if definition.exists():
+            stored = load_sweep_definition(definition, legacy=True)
+            if sweep is not None and sweep.digest != stored.digest:
+                raise SweepError(
+                    f"store {str(path)!r} was written by a different sweep definition "
+                    f"(its sweep {stored.name!r} has digest {stored.digest}, this one {sweep.name!r} has {sweep.digest}; "
+                    f"{_difference(stored, sweep)}). Members of two sweeps are never mixed: "
+                    "use another --store path, or delete this one to start over."
+                )
+            return cls(path, stored)
+        if sweep is None:
+            raise SweepError(f"{str(path)!r} is not a slipchain sweep store (no {DEFINITION} in it)")
+        if path.exists() and (not path.is_dir() or any(path.iterdir())):
+            raise SweepError(f"{str(path)!r} exists and is not a slipchain sweep store (no {DEFINITION}); "
+                             "give a new or empty directory as --store")
+        (path / MEMBERS).mkdir(parents=True, exist_ok=True)
+        (path / FAILED).mkdir(exist_ok=True)
+        write_text_atomic(definition, f"# slipchain sweep store; digest {sweep.digest}\n" + sweep.to_toml())
+        return cls(path, sweep)
+
+    # --- members -------------------------------------------------------------------------
+    def member_path(self, mid: str) -> Path:
+        return self.path / MEMBERS / f"{mid}.nc"
+
+    def failed_path(self, mid: str) -> Path:
+        return self.path / FAILED / f"{mid}.nc"
+
+    def completed_ids(self) -> set[str]:
+        return _ids_in(self.path / MEMBERS)
+
+    def failed_ids(self) -> set[str]:
+        return _ids_in(self.path / FAILED) - self.completed_ids()
+
+    def pending(self) -> list[Member]:
+        """Members not yet completed (missing or failed), in definition order."""
+        done = self.completed_ids()
+        return [m for m in self.sweep.members if m.id not in done]
+
+    def write_member(self, member: Member, ds: xr.Dataset) -> Path:
+        """Write one finished member atomically: completed ones to members/, others to failed/."""
+        ds = ds.copy()
+        ds.attrs["member_id"] = member.id
+        ds.attrs["sweep_digest"] = self.sweep.digest
+        for k, v in member.point:
+            ds.attrs[f"sweep_{k}"] = v
+        if ds.attrs.get("status") == Status.COMPLETED:
+            path = write_dataset(ds, self.member_path(member.id))
+            self.failed_path(member.id).unlink(missing_ok=True)
+        else:
+            path = write_dataset(ds, self.failed_path(member.id))
+        return path
+
+    def read_member(self, member: Member | str) -> xr.Dataset:
+        mid = member if isinstance(member, str) else member.id
+        path = self.member_path(mid)
+        if not path.exists():
+            path = self.failed_path(mid)
+        if not path.exists():
+            raise SweepError(f"member {mid} has not been run yet (store {str(self.path)!r})")
+        return read_dataset(path)
+
+    def find(self, **coords: Any) -> Member:
+        """The member at the given sweep coordinates (all dimensions must be given)."""
+        missing = set(self.sweep.dims) - set(coords)
+        if missing:
+            raise SweepError(f"find needs every sweep dimension; missing {sorted(missing)}")
+        for m in self.sweep.members:
+            if all(np.isclose(coords[k], v) if isinstance(v, float) else coords[k] == v for k, v in m.point):
+                return m
+        raise SweepError(f"no member of sweep {self.sweep.name!r} at {coords}")
+
+    # --- the sweep as one Dataset ---------------------------------------------------------
+    def member_attrs(self, member: Member) -> dict[str, Any] | None:
+        for path in (self.member_path(member.id), self.failed_path(member.id)):
+            if path.exists():
+                with h5netcdf.File(path, "r") as f:
+                    return {k: _plain(v) for k, v in f.attrs.items()}
+        return None
+
+    def dataset(self) -> xr.Dataset:
+        """Per-member results on the sweep's labelled grid: one dimension per swept parameter.
+
+        ``status`` is the member's status, ``missing`` if not run yet, ``absent`` where no grid
+        of the sweep has that combination.
+        """
+        sw = self.sweep
+        coords = sw.coords
+        shape = tuple(len(coords[d]) for d in sw.dims)
+        data = {k: np.full(shape, np.nan) for k in SUMMARY_VARS}
+        status = np.full(shape, ABSENT, dtype=object)
+        message = np.full(shape, "", dtype=object)
+        ids = np.full(shape, "", dtype=object)
+        version = np.full(shape, "", dtype=object)
+        vstatus = np.full(shape, "", dtype=object)
+        for m in sw.members:
+            idx = tuple(coords[d].index(v) for d, v in m.point)
+            ids[idx] = m.id
+            attrs = self.member_attrs(m)
+            if attrs is None:
+                status[idx] = MISSING
+                continue
+            status[idx] = attrs.get("status", Status.ERROR.value)
+            message[idx] = attrs.get("message", "")
+            version[idx] = attrs.get("slipchain_version", "")
+            vstatus[idx] = attrs.get("velocity_status", "")
+            for k, (attr, _) in SUMMARY_VARS.items():
+                if attr in attrs:
+                    data[k][idx] = float(attrs[attr])
+        dims = sw.dims
+        ds = xr.Dataset(
+            {k: (dims, v, {"long_name": SUMMARY_VARS[k][1]}) for k, v in data.items()},
+            coords={d: coords[d] for d in dims},
+        )
+        ds["status"] = (dims, status.astype(str))
+        ds["message"] = (dims, message.astype(str))
+        ds["member_id"] = (dims, ids.astype(str))
+        ds["slipchain_version"] = (dims, version.astype(str))
+        if (vstatus != "").any():
+            ds["velocity_status"] = (dims, vstatus.astype(str))
+        ds.attrs.update(sweep_name=sw.name, sweep_digest=sw.digest, store=str(self.path), definition=sw.to_toml())
+        return ds
+
+    def write_index(self) -> Path:
+        """Rewrite index.csv (atomically) from the member files."""
+        buf = io.StringIO()
+        w = csv.writer(buf)
+        w.writerow(["member_id", *self.sweep.dims, "status", "mu_star", "mu_star_sem", "t_total", "wall_time_s", "message"])
+        for m in self.sweep.members:
+            a = self.member_attrs(m) or {"status": MISSING}
+            w.writerow([m.id, *(v for _, v in m.point), a.get("status", ""), a.get("mu_star", ""),
+                        a.get("mu_star_sem", ""), a.get("t_total", ""), a.get("wall_time_s", ""), a.get("message", "")])
+        path = self.path / INDEX
+        write_text_atomic(path, buf.getvalue())
+        return path
+
+    def log_invocation(self, record: dict[str, Any]) -> None:
+        """Append one line to invocations.jsonl (a log for people and reports; losing a line loses nothing)."""
+        with (self.path / LOG).open("a") as fh:
+            fh.write(json.dumps(record) + "\n")
+
+    def invocations(self) -> list[dict[str, Any]]:
+        path = self.path / LOG
+        if not path.exists():
+            return []
+        out = []
+        for line in path.read_text().splitlines():
+            try:
+                out.append(json.loads(line))
+            except json.JSONDecodeError:  # a line cut by a kill
+                continue
+        return out
+
+
+def open_sweep(path: str | os.PathLike) -> xr.Dataset:
+    """The sweep Dataset of the store at ``path`` (see :meth:`Store.dataset`)."""
+    return Store.open(path).dataset()
+
+
+def _ids_in(folder: Path) -> set[str]:
+    if not folder.is_dir():
+        return set()
+    return {p.stem for p in folder.glob("*.nc") if not p.name.startswith(".")}
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, bytes):
+        return v.decode()
+    if isinstance(v, np.ndarray) and v.size == 1:
+        v = v.reshape(()).item()
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def _difference(a: SweepDefinition, b: SweepDefinition) -> str:
+    """Say in words how two sweep definitions differ."""
+    da, db = a.to_dict(), b.to_dict()
+    diffs = [f"base {k}: {da['base'].get(k)!r} vs {db['base'].get(k)!r}"
+             for k in sorted(set(da["base"]) | set(db["base"])) if da["base"].get(k) != db["base"].get(k)]
+    if a.dims != b.dims:
+        diffs.append(f"swept parameters {list(a.dims)} vs {list(b.dims)}")
+    elif da["grid"] != db["grid"]:
+        diffs.append("grid values differ: " + "; ".join(
+            f"{k}: {sorted({v for g in da['grid'] for v in g[k]})} vs {sorted({v for g in db['grid'] for v in g[k]})}"
+            for k in a.dims if a.coords[k] != b.coords[k]) or "grids differ")
+    return ", ".join(diffs[:6]) or "same values, different package defaults"
+
+
+__all__ = ["ABSENT", "MISSING", "Store", "open_sweep"]

@@ -1,0 +1,66 @@
+"""Figures from stores and tables, one function per ``slipchain figure`` command: open, check, compute, draw."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pandas as pd
+import xarray as xr
+
+from ..analysis.experiment import model_overlay
+from ..analysis.fig6 import contact_law_dataset
+from ..analysis.reports import epsilon_lines
+from ..analysis.statistics import epsilon_table
+from ..model.config import load_config
+from ..plots.mechanism import plot_dead_weight, plot_epsilon, plot_velocity
+from ..plots.paper import plot_fig5, plot_fig6
+from ..plots.tester import plot_model_vs_experiment
+from ..sweeps.definition import SweepError
+from ..sweeps.store import Store
+
+
+def sweep_dataset(store: str | os.PathLike, needs: set[str], what: str) -> xr.Dataset:
+    """The sweep Dataset of a store that sweeps at least ``needs``; SweepError naming what is missing."""
+    ds = Store.open(store).dataset()
+    if not needs <= set(ds.dims):
+        raise SweepError(f"store {str(store)!r} sweeps {list(ds.dims)}; {what} needs {', '.join(sorted(needs))}")
+    return ds
+
+
+def fig5(out: str | os.PathLike, config: str | os.PathLike | None = None, seed: int = 0) -> list[Path]:
+    """Fig. 5 for the config at ``config`` (default: the paper's), contact average of realisation ``seed``."""
+    return plot_fig5(contact_law_dataset(load_config(config), seed=seed), out)
+
+
+def fig6(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
+    return plot_fig6(sweep_dataset(store, {"theta", "eta_c", "v_d"}, "fig6"), out)
+
+
+def velocity(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
+    return plot_velocity(sweep_dataset(store, {"v_d"}, "the velocity figure"), out)
+
+
+def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
+    return plot_dead_weight(sweep_dataset(store, {"dead_weight"}, "the dead-weight figure"), out)
+
+
+def epsilon(store: str | os.PathLike, out: str | os.PathLike) -> tuple[list[Path], list[str]]:
+    """The epsilon figure, and one line per epsilon with the drop of mu_star from the smallest theta to the largest."""
+    avg = epsilon_table(sweep_dataset(store, {"epsilon", "theta"}, "the epsilon figure"))
+    return plot_epsilon(avg, out), epsilon_lines(avg)
+
+
+def tester(runs: str | os.PathLike, store: str | os.PathLike | None = None,
+           out: str | os.PathLike | None = None) -> list[Path]:
+    """Measured mu(v) (``runs``: an output directory of ``slipchain tester analyze``) with the model's
+    mu_star(v_d) curves from ``store``, one fitted scale factor per surface."""
+    table_path = Path(runs) / "runs.csv"
+    if not table_path.exists():
+        raise FileNotFoundError(f"{table_path} does not exist; run `slipchain tester analyze ... --out {runs}` first")
+    table = pd.read_csv(table_path)
+    sweep = sweep_dataset(store, {"v_d"}, "a model curve") if store is not None else None
+    return plot_model_vs_experiment(table, model_overlay(table, sweep), out or runs)
+
+
+__all__ = ["dead_weight", "epsilon", "fig5", "fig6", "sweep_dataset", "tester", "velocity"]

@@ -1,0 +1,53 @@
+"""The friction-tester analysis as one job: read and check the inputs, steady velocity per trace,
+mu and p0 with uncertainties, first maxima and the load test, figures; writes ``runs.csv``,
+``maxima.csv``, ``summary.md`` and the figures (all atomically).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from ..results.io import atomic_write, write_text_atomic
+from ..tester.analysis import LoadTest, analyze_runs, load_tests, maxima, summary_markdown
+from ..tester.inputs import read_runs, read_traces
+from ..plots.tester import plot_mu_v
+
+
+@dataclass
+class Analysis:
+    runs: pd.DataFrame
+    maxima: pd.DataFrame
+    tests: list[LoadTest]
+    files: dict[str, Path]
+
+
+def write_csv(df: pd.DataFrame, path: Path) -> Path:
+    """Write a table as CSV atomically; returns the path."""
+    with atomic_write(path) as tmp:
+        df.to_csv(tmp, index=False)
+    return path
+
+
+def analyze(runs_csv: str | os.PathLike, traces_csv: str | os.PathLike | None, out: str | os.PathLike) -> Analysis:
+    """The whole analysis; raises TesterDataError only for input that cannot be read at all."""
+    runs = read_runs(runs_csv)
+    orphans = read_traces(traces_csv, runs) if traces_csv is not None else []
+    table = analyze_runs(runs + orphans)
+    peaks = maxima(table)
+    tests = load_tests(table, peaks)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    figures = plot_mu_v(table, peaks, out)
+    files = {"runs": write_csv(table, out / "runs.csv"), "maxima": write_csv(peaks, out / "maxima.csv")}
+    text = summary_markdown(table, peaks, tests, [p.name for p in figures if p.suffix == ".png"])
+    files["summary"] = write_text_atomic(out / "summary.md", text)
+    for p in figures:
+        files[p.name] = p
+    return Analysis(table, peaks, tests, files)
+
+
+__all__ = ["Analysis", "analyze", "write_csv"]
