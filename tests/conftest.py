@@ -1,9 +1,45 @@
+"""Test set-up shared by every test: numba's cache, hypothesis, and the ``backend`` fixture.
+
+The ``backend`` fixture runs a physics test on every backend, as hoomd's and PySDM's test suites
+do: the CPU backend, and the CUDA backend, on numba's CUDA simulator (set here, before numba is
+imported) unless ``SLIPCHAIN_TEST_CUDA=hardware`` asks for a real GPU. The simulator runs the
+kernel as Python threads (about 50 ms per step for N = 11), so tests size their runs with
+``backend.small``.
+"""
+
 import os
+from dataclasses import dataclass
 
 os.environ.setdefault("NUMBA_CACHE_DIR", os.path.join(os.path.dirname(__file__), "..", ".numba_cache"))
+if os.environ.get("SLIPCHAIN_TEST_CUDA") != "hardware":
+    os.environ["NUMBA_ENABLE_CUDASIM"] = "1"  # must precede the first import of numba
 
-from hypothesis import settings
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
 
 # Numba compiles on first call; timings of single examples mean nothing here.
 settings.register_profile("slipchain", deadline=None, derandomize=True)
 settings.load_profile("slipchain")
+
+
+@dataclass(frozen=True)
+class BackendCase:
+    """A backend under test: its name for ``run(..., backend=name)``, and whether runs must be tiny."""
+
+    name: str
+    small: bool
+
+    def steps(self, cpu: int, cuda: int) -> int:
+        """Step count (or any size) for this backend: ``cuda`` on the simulator, else ``cpu``."""
+        return cuda if self.small else cpu
+
+
+@pytest.fixture(params=["cpu", pytest.param("gpu", marks=pytest.mark.cuda)])
+def backend(request) -> BackendCase:
+    if request.param == "gpu":
+        from slipchain.engine.backends.cuda import cuda_available
+
+        if not cuda_available():  # pragma: no cover - numba without its CUDA target
+            pytest.skip("numba.cuda is not usable here (neither a GPU nor the simulator)")
+        return BackendCase("gpu", small=os.environ.get("NUMBA_ENABLE_CUDASIM") == "1")
+    return BackendCase("cpu", small=False)

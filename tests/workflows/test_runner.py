@@ -13,10 +13,10 @@ import pytest
 from distributed import Client, LocalCluster
 
 from slipchain import run
-from slipchain.io import read_dataset
-from slipchain.runner import run_sweep
-from slipchain.store import Store
-from slipchain.sweep import make_sweep
+from slipchain.results.io import read_dataset
+from slipchain.sweeps.executor import run_sweep
+from slipchain.sweeps.store import Store
+from slipchain.sweeps.definition import make_sweep
 
 # Contacts all above v_d (no stick-slip), steady start: a member completes in well under a second.
 FAST = {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3, "theta": 0.5}
@@ -172,7 +172,7 @@ def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
 
 
 def test_batched_tasks_store_the_same_members(tmp_path, client):
-    from slipchain.runner import batches
+    from slipchain.sweeps.executor import batches
 
     sw = make_sweep({"name": "b", "base": FAST, "grid": {"theta": [0.5, 1.0], "seed": [0, 1], "N": [31, 41]}})
     groups = batches(sw.members, 3)

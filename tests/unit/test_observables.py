@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from slipchain.observables import batch_means_sem, mser_truncation, steady_estimate
+from slipchain.results.observables import batch_means_sem, mser_truncation, steady_estimate
 
 
 def _ar1(n, phi, sigma, rng):

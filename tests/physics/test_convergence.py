@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from slipchain import build_system, initial_state, make_config, simulate
-from slipchain.reference import reference_fd
+from slipchain.engine.reference import reference_fd
 
 WINDOW = dict(N=11, theta=4 / 11, v0=3e-3, delta=0.4, start="steady", t_total=2e-5, output_interval=1e-6)
 

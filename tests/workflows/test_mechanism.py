@@ -8,11 +8,11 @@ import pytest
 import xarray as xr
 
 from slipchain import make_config, run, simulate
-from slipchain.mechanism import (classify_series, median_frequency, record_field, slip_events, spectra,
+from slipchain.analysis.mechanism import (classify_series, median_frequency, record_field, slip_events, spectra,
                                  state_from_run, stick_slip_fraction)
-from slipchain.store import Store
-from slipchain.sweep import make_sweep
-from slipchain.system import build_system
+from slipchain.sweeps.store import Store
+from slipchain.sweeps.definition import make_sweep
+from slipchain.model.system import build_system
 
 V_D = 1e-3
 

@@ -5,7 +5,7 @@ import pytest
 from scipy.optimize import brentq
 
 from slipchain import make_config, run
-from slipchain.sweep import member_id
+from slipchain.sweeps.definition import member_id
 
 
 def _single_contact(dw, **kw):

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from slipchain import make_config
-from slipchain.runner import error_dataset
-from slipchain.store import Store, open_sweep
-from slipchain.sweep import SweepError, load_preset, load_sweep_definition, make_sweep, member_id
+from slipchain.sweeps.executor import error_dataset
+from slipchain.sweeps.store import Store, open_sweep
+from slipchain.sweeps.definition import SweepError, load_preset, load_sweep_definition, make_sweep, member_id
 
 FAST = {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3}
 

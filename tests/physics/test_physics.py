@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from slipchain import State, build_system, make_config, run, simulate
-from slipchain.backend import Batch, get_backend
-from slipchain.checks import displacement_check, energy_check, stored_energy
+from slipchain.engine.backends import Batch, get_backend
+from slipchain.results.checks import displacement_check, energy_check, stored_energy
 
 
 def test_single_fast_contact_slides_steadily_at_the_law():
@@ -45,12 +45,12 @@ def test_free_chain_conserves_energy_to_first_order():
     assert 1.6 < e1 / e2 < 2.5 and 1.6 < e2 / e3 < 2.5  # symplectic Euler: bounded O(dt) error
 
 
-def test_uniform_translation_moves_every_block_together():
+def test_uniform_translation_moves_every_block_together(backend):
     # No contacts, damping on, every block moving at v_d with relaxed springs: nothing changes
     # but the common displacement v_d*t.
-    cfg = make_config(N=11, start="steady", t_total=1e-4, output_interval=1e-6)
+    cfg = make_config(N=11, start="steady", t_total=backend.steps(1e-4, 1e-6), output_interval=backend.steps(1e-6, 2e-7))
     system = build_system(cfg, contact_sites=[], vstar=[])
-    ds = simulate(system)
+    ds = simulate(system, backend=backend.name)
     t = ds.attrs["steps"] * cfg.dt
     for name in ("x", "X"):
         assert np.ptp(ds[name].values) < 1e-20
@@ -60,19 +60,21 @@ def test_uniform_translation_moves_every_block_together():
     assert np.isnan(ds.attrs["mu_star"])  # undefined without contacts
 
 
-def test_same_seed_same_bits_different_seed_different_run():
-    over = dict(N=31, theta=0.5, start="steady", t_total=5e-4)
-    a, b = run(over), run(over)
-    c = run({**over, "seed": 1})
+def test_same_seed_same_bits_different_seed_different_run(backend):
+    over = dict(N=backend.steps(31, 11), theta=0.5, start="steady", t_total=backend.steps(5e-4, 1e-6),
+                output_interval=backend.steps(1e-5, 2e-7))
+    a, b = run(over, backend=backend.name), run(over, backend=backend.name)
+    c = run({**over, "seed": 1}, backend=backend.name)
     assert np.array_equal(a.f_d.values, b.f_d.values) and np.array_equal(a.x.values, b.x.values)
     assert np.array_equal(a.vstar.values, b.vstar.values)
     assert not np.array_equal(a.vstar.values, c.vstar.values)
     assert not np.array_equal(a.f_d.values, c.f_d.values)
 
 
-def test_blow_up_is_reported_as_diverged_with_step_and_time():
+def test_blow_up_is_reported_as_diverged_with_step_and_time(backend):
     # Springs 1e8 times stiffer than the paper's: the explicit part is unstable at this dt.
-    ds = run(dict(N=11, theta=0.5, E=1e15, t_total=1e-4))
+    ds = run(dict(N=11, theta=0.5, E=1e15, t_total=1e-4, output_interval=backend.steps(1e-5, 2e-7)),
+             backend=backend.name)
     assert ds.attrs["status"] == "diverged"
     assert "non-finite state at step" in ds.attrs["message"] and "t = " in ds.attrs["message"]
 
@@ -111,7 +113,7 @@ def test_automatic_length_does_not_stop_during_loading():
 def test_automatic_length_slides_at_least_a_micrometre_at_low_drive_velocity():
     """A steady start at very low v_d looks converged long before it has settled; the automatic
     stop waits until the drive has moved MIN_STEADY_SLIDE through the steady window."""
-    from slipchain.simulation import MIN_STEADY_SLIDE
+    from slipchain.engine.control import MIN_STEADY_SLIDE
 
     ds = run({"N": 31, "theta": 0.5, "start": "steady", "v_d": 1e-5, "t_max": 1.0})
     assert ds.attrs["status"] == "completed" and ds.attrs["sem_target_reached"] == 1

@@ -9,11 +9,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from slipchain.tester import TesterDataError, analyze
+from slipchain.tester import TesterDataError
+from slipchain.workflows.tester import analyze
 from slipchain.tester.analysis import load_tests, maxima, mu_with_uncertainty
-from slipchain.tester.plots import fit_scale
+from slipchain.analysis.experiment import fit_scale
 from slipchain.tester.synth import SynthLaw, SynthSetup, synthesize
-from slipchain.tester.velocity import NO_STEADY, OK, RUNAWAY, steady_velocity
+from slipchain.results.velocity import NO_STEADY, OK, RUNAWAY, steady_velocity
 
 
 def test_straight_line_velocity_and_its_standard_error():
@@ -169,7 +170,7 @@ def _load_test(s, seed):
     setup = SynthSetup(seed=seed)
     runs, traces, _ = synthesize(replace(setup, law=replace(setup.law, s=s)))
     from slipchain.tester.analysis import analyze_runs
-    from slipchain.tester.io import Run
+    from slipchain.tester.inputs import Run
 
     rs = []
     for r in runs.to_dict("records"):
@@ -199,8 +200,8 @@ def test_fit_scale_recovers_a_known_factor():
 
 def test_cli_synth_analyze_and_model_overlay(tmp_path):
     from slipchain import run
-    from slipchain.store import Store
-    from slipchain.sweep import make_sweep
+    from slipchain.sweeps.store import Store
+    from slipchain.sweeps.definition import make_sweep
 
     syn = subprocess.run([sys.executable, "-m", "slipchain", "tester", "synth", "--out", str(tmp_path / "syn")],
                          capture_output=True, text=True, timeout=120)

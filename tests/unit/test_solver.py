@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from slipchain import kernel as K
+from slipchain.engine.backends import cpu as K
 from slipchain import make_config
 
 CFG = make_config()
