@@ -22,8 +22,8 @@ import time
 import numpy as np
 
 from slipchain import build_system, initial_state, make_config, run, simulate
-from slipchain.backend import Batch, get_backend
-from slipchain.reference import reference_fd
+from slipchain.engine.backends import Batch, get_backend
+from slipchain.engine.reference import reference_fd
 
 REF = dict(N=301, theta=1.0, eta_c=1e5, v_d=1e-3)
 

@@ -18,7 +18,7 @@ import tempfile
 import time
 
 from slipchain import build_system, initial_state, make_config
-from slipchain.backend import Batch, CPUBackend, get_backend
+from slipchain.engine.backends import Batch, CPUBackend, get_backend
 
 STEPS = 20_000
 
@@ -45,7 +45,7 @@ def main() -> None:
     if args.agreement:  # issue 6: mu_star from GPU and CPU within their standard errors over a full run
         from slipchain import run
 
-        res = {b: run({"backend": b}) for b in ("cpu", "gpu")}
+        res = {b: run(None, backend=b) for b in ("cpu", "gpu")}
         for b, ds in res.items():
             print(f"{b}: mu_star = {ds.attrs['mu_star']:.4f} ± {ds.attrs['mu_star_sem']:.4f}, "
                   f"{ds.attrs['t_total'] * 1e3:.1f} ms simulated, {ds.attrs['wall_time_s']:.1f} s wall")

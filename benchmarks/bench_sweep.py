@@ -15,9 +15,9 @@ import argparse
 import tempfile
 import time
 
-from slipchain.runner import default_workers, run_sweep
-from slipchain.store import Store
-from slipchain.sweep import make_sweep
+from slipchain.sweeps.executor import default_workers, run_sweep
+from slipchain.sweeps.store import Store
+from slipchain.sweeps.definition import make_sweep
 
 
 def main() -> None:

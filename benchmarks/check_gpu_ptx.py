@@ -28,10 +28,10 @@ def main() -> None:
 
     dispatcher.get_current_device = lambda: _Device()
 
-    from slipchain import gpu
+    from slipchain.engine.backends import cuda as gpu
 
     a2, a3 = float64[:, :], float64[:, :, :]
-    sig = (a2, a2, a2, a2, int64[:], a2, int64[:, :], a2, int64[:], a2, int64, int64, a3, a2, a3, int64[:],
+    sig = (a2, a2, a2, a2, int64[:], a2, int64[:, :], a2, int64[:], a3, int64, int64, a3, a2, a3, int64[:],
            a2, a2, a2, a2)
     ptx, _ = cuda.compile_ptx(gpu.advance_kernel.py_func, sig, cc=cc)
     print(f"advance_kernel -> PTX for sm_{cc[0]}{cc[1]}: {len(ptx.splitlines())} lines, "

@@ -186,10 +186,19 @@ def block_update(i, ip, im, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
     dampX[i] = dX
 
 
+def row_parameters(p):
+    """The scheme's constants for one row ``p`` of the (B, P) parameter array: (K, K_L, K_T, K_d,
+    m, m*eta, v_d, F_b, dt, dt/m, dt/(N_L m), b = dt*epsilon*f0, c, m_eff = m(1 + dt*eta_c), slow)."""
+    dt = p[P_DT]
+    m = p[P_M]
+    return (p[P_K], p[P_KL], p[P_KT], p[P_KD], m, p[P_META], p[P_VD], p[P_FCONST], dt, dt / m, dt / p[P_ML],
+            dt * p[P_AMP], p[P_C], m * (1.0 + dt * p[P_ETAC]), p[P_SLOW])
+
+
 # The scheme's functions in dependency order; those marked True are small enough to inline.
 FUNCTIONS: tuple[tuple[str, bool], ...] = (
     ("exp_taylor", True), ("scaled_exp", True), ("solve_contact_bracketed", False), ("taylor_newton_step", True),
-    ("solve_contact", False), ("block_update", True),
+    ("solve_contact", False), ("block_update", True), ("row_parameters", True),
 )
 
 

@@ -16,8 +16,7 @@ import numba as nb
 import numpy as np
 
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, N_ACC, N_CACC, N_OUT,
-                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_AMP, P_C, P_DT, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KT,
-                      P_M, P_META, P_ML, P_SLOW, P_VD, TAYLOR_MAX, Y_LOG, Y_P, Y_Q, compile_for)
+                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, TAYLOR_MAX, Y_LOG, Y_P, Y_Q, compile_for)
 from .base import Batch, ChunkOutput
 
 _scheme = compile_for(lambda name, inline: nb.njit(cache=True, inline="always" if inline else "never"))
@@ -27,6 +26,7 @@ solve_contact_bracketed = _scheme.solve_contact_bracketed
 taylor_newton_step = _scheme.taylor_newton_step
 solve_contact = _scheme.solve_contact
 block_update = _scheme.block_update
+row_parameters = _scheme.row_parameters
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -127,22 +127,8 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
     for row in range(nb_rows):
         if status[row] >= 0:
             continue
-        K = params[row, P_K]
-        KL = params[row, P_KL]
-        KT = params[row, P_KT]
-        Kd = params[row, P_KD]
-        m = params[row, P_M]
-        meta = params[row, P_META]
-        vd = params[row, P_VD]
-        fconst = params[row, P_FCONST]
-        dt = params[row, P_DT]
-        dtm = dt / m
-        dtmL = dt / params[row, P_ML]
+        K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = row_parameters(params[row])
         inv_dt = 1.0 / dt
-        bc = dt * params[row, P_AMP]
-        c = params[row, P_C]
-        m_eff = m * (1.0 + dt * params[row, P_ETAC])
-        slow = params[row, P_SLOW]
         nc = n_contacts[row]
         xr = x[row]
         ur = u[row]

@@ -46,9 +46,8 @@ def cuda_available() -> bool:
 _scheme = S.compile_for(lambda name, inline: cuda.jit(device=True))
 solve_contact = _scheme.solve_contact
 block_update = _scheme.block_update
+row_parameters = _scheme.row_parameters
 LN10 = S.LN10
-P_K, P_KL, P_KT, P_KD, P_M, P_ML, P_META = S.P_K, S.P_KL, S.P_KT, S.P_KD, S.P_M, S.P_ML, S.P_META
-P_VD, P_FCONST, P_DT, P_AMP, P_C, P_ETAC, P_SLOW = S.P_VD, S.P_FCONST, S.P_DT, S.P_AMP, S.P_C, S.P_ETAC, S.P_SLOW
 O_FD, O_XMEAN, O_XUMEAN = S.O_FD, S.O_XMEAN, S.O_XUMEAN
 A_WDRIVE, A_WDAMP, A_WCONTACT = S.A_WDRIVE, S.A_WDAMP, S.A_WCONTACT
 C_F, C_U, C_U2, C_SLOW = S.C_F, S.C_U, S.C_U2, S.C_SLOW
@@ -83,21 +82,7 @@ def advance_kernel(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n
     xr, ur, Xr, Ur = x[row], u[row], X[row], U[row]
     unr, Unr, dxr, dXr = un[row], Un[row], dampx[row], dampX[row]
     ys = ysolve[row]
-    K = params[row, P_K]
-    KL = params[row, P_KL]
-    KT = params[row, P_KT]
-    Kd = params[row, P_KD]
-    m = params[row, P_M]
-    meta = params[row, P_META]
-    vd = params[row, P_VD]
-    fconst = params[row, P_FCONST]
-    dt = params[row, P_DT]
-    dtm = dt / m
-    dtmL = dt / params[row, P_ML]
-    bc = dt * params[row, P_AMP]
-    c = params[row, P_C]
-    m_eff = m * (1.0 + dt * params[row, P_ETAC])
-    slow = params[row, P_SLOW]
+    K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = row_parameters(params[row])
     nc = n_contacts[row]
     step0 = step[row]
     w_drive = 0.0
