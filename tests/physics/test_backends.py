@@ -45,14 +45,18 @@ def test_cuda_kernel_agrees_with_the_cpu_kernel_step_by_step():
 
 
 def test_runs_on_a_backend_match_the_cpu(backend):
+    # Over 80 steps (simulator) the backends agree to round-off; over 1000 steps (CPU, a real GPU)
+    # round-off differences (CPU fastmath reassociation, GPU fused multiply-adds) grow through the
+    # dynamics: measured 8e-12 on an H100, hence the wider bound there.
+    tol = 1e-12 if backend.small else 1e-9
     short = [c.with_updates(t_total=backend.steps(2e-5, 1.6e-6)) for c in CONFIGS[:3]]
     got = simulate_batch([build_system(c) for c in short], backend=backend.name)
     ref = simulate_batch([build_system(c) for c in short], backend="cpu")
     for g, r in zip(got, ref):
         # (too short for the after-run displacement check to pass from rest: same verdict on both)
         assert g.attrs["status"] == r.attrs["status"] and g.attrs["backend"] == backend.name
-        assert _rel(r["f_d"].values, g["f_d"].values) < 1e-12  # (zero for the dead-weight row: no drive springs)
-        assert _rel(r["x_mean"].values, g["x_mean"].values) < 1e-12
+        assert _rel(r["f_d"].values, g["f_d"].values) < tol  # (zero for the dead-weight row: no drive springs)
+        assert _rel(r["x_mean"].values, g["x_mean"].values) < tol
         assert g.attrs["check_energy_balance"] == pytest.approx(r.attrs["check_energy_balance"], rel=1e-6, abs=1e-12)
 
 
