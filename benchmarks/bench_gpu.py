@@ -77,7 +77,7 @@ def main() -> None:
         r = throughput(gpu, b, args.steps)
         print(f"{b:>6} {r:>18.3e} {r / cpu1:>20.1f} {b * 301 / r * 1e6:>12.2f}", flush=True)
     if args.threads:
-        for th in (32, 64, 96, 128):
+        for th in (64, 128, 192, 256):
             for b in (132, 1024):
                 r = throughput(CUDABackend(threads=th), b, args.steps)
                 print(f"threads per block {th:>4}, batch {b:>5}: {r:.3e} block-steps/s, "

@@ -47,6 +47,7 @@ from .store import Store
 
 ERROR = Status.ERROR.value
 GPU_BATCH = 256  # members per task with the GPU backend
+GPU_THREADS = 4  # tasks the GPU worker runs at once (each batch on its own CUDA stream, so they overlap)
 
 
 def run_members(configs: list[Config], backend: str = BackendName.CPU) -> list[xr.Dataset]:
@@ -127,7 +128,8 @@ def default_workers() -> int:
 
 
 @contextmanager
-def dask_client(scheduler: str | None = None, n_workers: int | None = None) -> Iterator["object"]:
+def dask_client(scheduler: str | None = None, n_workers: int | None = None,
+                threads_per_worker: int = 1) -> Iterator["object"]:
     """A ``distributed.Client``: to ``scheduler`` if given, else to a new local cluster."""
     from distributed import Client, LocalCluster
 
@@ -135,7 +137,7 @@ def dask_client(scheduler: str | None = None, n_workers: int | None = None) -> I
         with Client(scheduler) as client:
             yield client
         return
-    with LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1, processes=True,
+    with LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=threads_per_worker, processes=True,
                       host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR) as cluster:
         with Client(cluster) as client:
             yield client
@@ -150,11 +152,15 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     address) or a new local cluster of ``n_workers`` processes (default: one per core; one with
     ``backend = 'gpu'``). ``backend``: where the members are computed ('cpu', 'gpu', 'auto'; not
     part of their identity, so CPU and GPU members share a store). ``batch_size``: members per task, advanced together by one kernel launch
-    (:func:`run_members`); default 1 on the CPU, 256 with ``backend = 'gpu'``.
+    (:func:`run_members`); default 1 on the CPU, 256 with ``backend = 'gpu'``. With the GPU the
+    local cluster is one worker process with GPU_THREADS threads: up to that many batches (of
+    different N or dt) advance at once, each on its own CUDA stream.
     """
-    if backend == "gpu":
+    threads = 1
+    if backend == "gpu":  # one worker process owns the GPU; its threads run batches on separate streams
         batch_size = batch_size or GPU_BATCH
         n_workers = n_workers or 1
+        threads = GPU_THREADS
     st = store if isinstance(store, Store) else Store.open(store, sweep)
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
@@ -169,7 +175,7 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
             if client is not None:
                 _execute(client, st, groups, report, bar, backend)
             else:
-                with dask_client(scheduler, n_workers) as c:
+                with dask_client(scheduler, n_workers, threads) as c:
                     _execute(c, st, groups, report, bar, backend)
     except KeyboardInterrupt:
         report.interrupted = True
@@ -244,5 +250,5 @@ class _SweepProgress:
             self._bar.stop()
 
 
-__all__ = ["GPU_BATCH", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
+__all__ = ["GPU_BATCH", "GPU_THREADS", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
            "run_sweep"]

@@ -25,6 +25,7 @@ Importing this module never needs CUDA: the kernel is compiled on first launch.
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 from numba import cuda, float64  # imports without a GPU; kernels compile on first launch
@@ -32,15 +33,34 @@ from numba import cuda, float64  # imports without a GPU; kernels compile on fir
 from .. import scheme as S
 from .base import Batch, ChunkOutput
 
-THREADS_MAX = 128  # threads per block (shared-memory reduction size); fewer for small chains
+THREADS_MAX = 256  # threads per block (shared-memory reduction size); fewer for small chains. Measured on an
+# H100 (benchmarks/bench_gpu.py --threads): a step's latency falls with more threads per chain
+# (fewer blocks of the chain per thread), 32 -> 128 threads: 15.0 -> 5.1 us per step at N = 301
+
+
+# numba-cuda initialises the driver lazily and not thread-safely: two threads of one process
+# (the sweep's GPU worker) initialising it at once fail with CUDA_ERROR_NOT_INITIALIZED
+# (seen on an H100 with numba-cuda 0.30.4). Initialisation and each thread's first context
+# activation happen under this lock.
+_INIT_LOCK = threading.Lock()
 
 
 def cuda_available() -> bool:
     """True when numba.cuda finds a GPU (or its simulator is enabled)."""
     try:
-        return bool(cuda.is_available())
+        with _INIT_LOCK:
+            return bool(cuda.is_available())
     except Exception:  # pragma: no cover - numba without its CUDA target
         return False
+
+
+def _sm_count() -> int:
+    """Multiprocessors of the current GPU (the simulator has no such notion: unlimited)."""
+    try:
+        with _INIT_LOCK:
+            return int(cuda.get_current_device().MULTIPROCESSOR_COUNT)
+    except AttributeError:  # numba's CUDA simulator
+        return 1 << 30
 
 
 _scheme = S.compile_for(lambda name, inline: cuda.jit(device=True))
@@ -174,24 +194,37 @@ class CUDABackend:
             raise RuntimeError("backend 'gpu' needs a CUDA GPU (numba.cuda found none); use backend 'cpu' or 'auto'")
         self.threads = threads
 
+    @staticmethod
+    def default_threads(rows: int) -> int:
+        """Threads per CUDA block: 256 while every row has a multiprocessor to itself (shortest
+        step), else 128 (more blocks resident per multiprocessor). H100, N = 301: 3.9 vs 5.3 us per
+        step at 132 rows; 7.8 vs 6.8 us at 256 rows (benchmarks/bench_gpu.py --threads)."""
+        return THREADS_MAX if rows <= _sm_count() else 128
+
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
         b, n = batch.x.shape
         cmax = batch.sites.shape[1]
-        threads = self.threads or min(THREADS_MAX, max(1, n))
+        threads = self.threads or min(self.default_threads(b), max(1, n))
         out = np.zeros((b, n_samples, S.N_OUT))
         acc = np.zeros((b, S.N_ACC))
         cacc = np.zeros((b, S.N_CACC, cmax))
-        d = {k: cuda.to_device(np.ascontiguousarray(v)) for k, v in dict(
+        # A stream of its own per call: batches advanced from several threads of one process (the
+        # sweep's GPU worker) run concurrently on the device.
+        with _INIT_LOCK:
+            stream = cuda.stream()  # (activates this thread's context under the lock)
+        d = {k: cuda.to_device(np.ascontiguousarray(v), stream=stream) for k, v in dict(
             x=batch.x, u=batch.u, X=batch.X, U=batch.U, step=batch.step, params=batch.params, sites=batch.sites,
             vstar=batch.vstar, n_contacts=batch.n_contacts, ysolve=batch.ysolve, out=out, acc=acc, cacc=cacc,
             status=batch.status).items()}
-        scratch = [cuda.device_array((b, n)) for _ in range(4)]
-        advance_kernel[b, threads](d["x"], d["u"], d["X"], d["U"], d["step"], d["params"], d["sites"], d["vstar"],
-                                   d["n_contacts"], d["ysolve"], n_samples, sample_steps, d["out"], d["acc"], d["cacc"],
-                                   d["status"], *scratch)
+        scratch = [cuda.device_array((b, n), stream=stream) for _ in range(4)]
+        advance_kernel[b, threads, stream](d["x"], d["u"], d["X"], d["U"], d["step"], d["params"], d["sites"],
+                                           d["vstar"], d["n_contacts"], d["ysolve"], n_samples, sample_steps, d["out"],
+                                           d["acc"], d["cacc"], d["status"], *scratch)
         for name in ("x", "u", "X", "U", "step", "status", "ysolve"):
-            getattr(batch, name)[...] = d[name].copy_to_host()
-        return ChunkOutput(d["out"].copy_to_host(), d["acc"].copy_to_host(), d["cacc"].copy_to_host())
+            d[name].copy_to_host(getattr(batch, name), stream=stream)
+        res = [d[k].copy_to_host(stream=stream) for k in ("out", "acc", "cacc")]
+        stream.synchronize()
+        return ChunkOutput(*res)
 
 
 GPUBackend = CUDABackend  # the name used before 0.2
