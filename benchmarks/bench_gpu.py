@@ -2,7 +2,7 @@
 
     pip install -e ".[gpu]"
     python benchmarks/bench_gpu.py                 # block-steps per second vs batch size, GPU and one CPU core
-    python benchmarks/bench_gpu.py --threads       # also: threads per CUDA block at a fixed batch size
+    python benchmarks/bench_gpu.py --threads       # also: threads per CUDA block, state in shared vs global memory
     python benchmarks/bench_gpu.py --agreement     # also: full runs on GPU and CPU (reference point, a v_d2 point)
     python benchmarks/bench_gpu.py --paper         # also: slipchain reproduce --preset paper --backend gpu
 
@@ -77,11 +77,12 @@ def main() -> None:
         r = throughput(gpu, b, args.steps)
         print(f"{b:>6} {r:>18.3e} {r / cpu1:>20.1f} {b * 301 / r * 1e6:>12.2f}", flush=True)
     if args.threads:
-        for th in (64, 128, 192, 256):
-            for b in (132, 1024):
-                r = throughput(CUDABackend(threads=th), b, args.steps)
-                print(f"threads per block {th:>4}, batch {b:>5}: {r:.3e} block-steps/s, "
-                      f"{b * 301 / r * 1e6:.2f} us per step", flush=True)
+        for shared in (True, False):
+            for th in (128, 256):
+                for b in (1, 132, 256, 1024):
+                    r = throughput(CUDABackend(threads=th, shared=shared), b, args.steps)
+                    print(f"state in {'shared' if shared else 'global'} memory, threads per block {th:>4}, batch {b:>5}: "
+                          f"{r:.3e} block-steps/s, {b * 301 / r * 1e6:.2f} us per step", flush=True)
     if args.agreement:
         for point in ({"theta": 1.0, "eta_c": 1e5, "v_d": 1e-3, "seed": 0}, {"theta": 1.0, "eta_c": 1e5, "v_d": 3e-4, "seed": 0},
                       {"theta": 0.1, "eta_c": 1e5, "v_d": 1e-3, "seed": 0}):

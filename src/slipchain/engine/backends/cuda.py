@@ -11,6 +11,10 @@ as device functions, separated by block-wide barriers:
    bracketed fallback), with 10**y and exp(-c y^2) recomputed exactly at every sample as on the CPU;
 3. barrier; positions; barrier.
 
+While they fit in a block's 48 KB of shared memory (N <= 736 at 256 threads), a row's state and
+scratch arrays live in shared memory for the whole chunk (copied in and out once per launch): a
+step's barriers then wait on shared-memory traffic instead of global-memory round trips. Larger
+chains keep them in global memory (same device function, other array arguments).
 Per-sample outputs (mean f_d, mean x, mean X) are reduced across the block in shared memory
 once per sample; work and per-contact sums stay in registers/global memory. No per-step launch
 or host round trip: the host copies the batch in and out once per call of :meth:`CUDABackend.advance`
@@ -33,6 +37,8 @@ from numba import cuda, float64  # imports without a GPU; kernels compile on fir
 from .. import scheme as S
 from .base import Batch, ChunkOutput
 
+SHARED_ARRAYS = 8  # x, u, X, U and the scratch un, Un, dampx, dampX of a row, in shared memory when they fit
+SHARED_BYTES = 48 * 1024  # shared memory a block may use without opting in to more
 THREADS_MAX = 256  # threads per block (shared-memory reduction size); fewer for small chains. Measured on an
 # H100 (benchmarks/bench_gpu.py --threads): a step's latency falls with more threads per chain
 # (fewer blocks of the chain per thread), 32 -> 128 threads: 15.0 -> 5.1 us per step at N = 301
@@ -89,26 +95,18 @@ def _block_sum(buf, value, tid, nthreads):
     return total
 
 
-@cuda.jit
-def advance_kernel(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_samples, sample_steps,
-                   out, acc, cacc, status, un, Un, dampx, dampX):
-    row = cuda.blockIdx.x
-    tid = cuda.threadIdx.x
-    nthreads = cuda.blockDim.x
-    buf = cuda.shared.array(THREADS_MAX, float64)
-    n = x.shape[1]
-    if status[row] >= 0:
-        return
-    xr, ur, Xr, Ur = x[row], u[row], X[row], U[row]
-    unr, Unr, dxr, dXr = un[row], Un[row], dampx[row], dampX[row]
-    ys = ysolve[row]
-    K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = row_parameters(params[row])
-    nc = n_contacts[row]
-    step0 = step[row]
+@cuda.jit(device=True)
+def _advance_row(xr, ur, Xr, Ur, unr, Unr, dxr, dXr, buf, p, st, vs, nc, ys, ca, outr, n_samples, sample_steps,
+                 step0, tid, nthreads):
+    """One row's time loop (the scheme, steps 1-4, with barriers) on 1-d state arrays that live in
+    shared or in global memory. Returns (first non-finite step or -1, W_drive, W_damping,
+    W_contacts), block-reduced."""
+    n = xr.shape[0]
+    K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = row_parameters(p)
     w_drive = 0.0
     w_damp = 0.0
     w_contact = 0.0
-    bad = 0
+    bad = -1
     for s in range(n_samples):
         k = tid
         while k < nc:  # exact 10**y and exp(-c y^2) at every sample, as on the CPU
@@ -129,17 +127,17 @@ def advance_kernel(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n
             cuda.syncthreads()
             k = tid
             while k < nc:
-                site = sites[row, k]
+                site = st[k]
                 r = m * unr[site]
-                uk, ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact(r, m_eff, bc, c, vstar[row, k], ys[Y_LOG, k],
+                uk, ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact(r, m_eff, bc, c, vs[k], ys[Y_LOG, k],
                                                                          ys[Y_P, k], ys[Y_Q, k])
                 fk = (r - m * uk) / dt
                 unr[site] = uk
-                cacc[row, C_F, k] += fk
-                cacc[row, C_U, k] += uk
-                cacc[row, C_U2, k] += uk * uk
+                ca[C_F, k] += fk
+                ca[C_U, k] += uk
+                ca[C_U2, k] += uk * uk
                 if abs(uk) < slow:
-                    cacc[row, C_SLOW, k] += 1.0
+                    ca[C_SLOW, k] += 1.0
                 w_contact -= fk * uk * dt
                 k += nthreads
             cuda.syncthreads()
@@ -166,22 +164,65 @@ def advance_kernel(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n
         Xs = _block_sum(buf, Xs_local, tid, nthreads)
         wc = _block_sum(buf, w_contact, tid, nthreads)
         if tid == 0:
-            out[row, s, O_FD] += fd / sample_steps
-            out[row, s, O_XMEAN] += xs / n
-            out[row, s, O_XUMEAN] += Xs / n
+            outr[s, O_FD] += fd / sample_steps
+            outr[s, O_XMEAN] += xs / n
+            outr[s, O_XUMEAN] += Xs / n
         if not (math.isfinite(fd) and math.isfinite(xs) and math.isfinite(wc)):
-            bad = 1
-            if tid == 0:
-                status[row] = step0 + (s + 1) * sample_steps
+            bad = step0 + (s + 1) * sample_steps
             break
-    wd = _block_sum(buf, w_drive, tid, nthreads)
-    wdamp = _block_sum(buf, w_damp, tid, nthreads)
-    wc = _block_sum(buf, w_contact, tid, nthreads)
+    return (bad, _block_sum(buf, w_drive, tid, nthreads), _block_sum(buf, w_damp, tid, nthreads),
+            _block_sum(buf, w_contact, tid, nthreads))
+
+
+@cuda.jit
+def advance_kernel(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_samples, sample_steps,
+                   out, acc, cacc, status, un, Un, dampx, dampX, in_shared):
+    """Advance row blockIdx.x of the batch. With ``in_shared`` = 1 the row's eight state and scratch
+    arrays are copied into dynamic shared memory for the chunk (launch with SHARED_ARRAYS*N +
+    threads doubles of it); else they stay in global memory and only the reduction buffer is shared."""
+    row = cuda.blockIdx.x
+    tid = cuda.threadIdx.x
+    nthreads = cuda.blockDim.x
+    if status[row] >= 0:
+        return
+    sh = cuda.shared.array(0, float64)
+    n = x.shape[1]
+    step0 = step[row]
+    if in_shared:
+        i = tid
+        while i < n:
+            sh[i] = x[row, i]
+            sh[n + i] = u[row, i]
+            sh[2 * n + i] = X[row, i]
+            sh[3 * n + i] = U[row, i]
+            i += nthreads
+        cuda.syncthreads()
+        bad, wd, wdamp, wc = _advance_row(sh[0:n], sh[n:2 * n], sh[2 * n:3 * n], sh[3 * n:4 * n], sh[4 * n:5 * n],
+                                          sh[5 * n:6 * n], sh[6 * n:7 * n], sh[7 * n:8 * n],
+                                          sh[SHARED_ARRAYS * n:SHARED_ARRAYS * n + nthreads], params[row], sites[row],
+                                          vstar[row], n_contacts[row], ysolve[row], cacc[row], out[row], n_samples,
+                                          sample_steps, step0, tid, nthreads)
+        i = tid
+        while i < n:
+            x[row, i] = sh[i]
+            u[row, i] = sh[n + i]
+            X[row, i] = sh[2 * n + i]
+            U[row, i] = sh[3 * n + i]
+            i += nthreads
+    else:
+        bad, wd, wdamp, wc = _advance_row(x[row], u[row], X[row], U[row], un[row], Un[row], dampx[row], dampX[row],
+                                          sh[0:nthreads], params[row], sites[row], vstar[row], n_contacts[row],
+                                          ysolve[row], cacc[row], out[row], n_samples, sample_steps, step0, tid,
+                                          nthreads)
     if tid == 0:
         acc[row, A_WDRIVE] += wd
         acc[row, A_WDAMP] += wdamp
         acc[row, A_WCONTACT] += wc
-        step[row] = status[row] if bad else step0 + n_samples * sample_steps
+        if bad >= 0:
+            status[row] = bad
+            step[row] = bad
+        else:
+            step[row] = step0 + n_samples * sample_steps
 
 
 class CUDABackend:
@@ -189,10 +230,11 @@ class CUDABackend:
 
     name = "gpu"
 
-    def __init__(self, threads: int | None = None):
+    def __init__(self, threads: int | None = None, shared: bool = True):
         if not cuda_available():
             raise RuntimeError("backend 'gpu' needs a CUDA GPU (numba.cuda found none); use backend 'cpu' or 'auto'")
         self.threads = threads
+        self.shared = shared  # state in shared memory where it fits (N <= 736 at 256 threads)
 
     @staticmethod
     def default_threads(rows: int) -> int:
@@ -216,10 +258,12 @@ class CUDABackend:
             x=batch.x, u=batch.u, X=batch.X, U=batch.U, step=batch.step, params=batch.params, sites=batch.sites,
             vstar=batch.vstar, n_contacts=batch.n_contacts, ysolve=batch.ysolve, out=out, acc=acc, cacc=cacc,
             status=batch.status).items()}
-        scratch = [cuda.device_array((b, n), stream=stream) for _ in range(4)]
-        advance_kernel[b, threads, stream](d["x"], d["u"], d["X"], d["U"], d["step"], d["params"], d["sites"],
-                                           d["vstar"], d["n_contacts"], d["ysolve"], n_samples, sample_steps, d["out"],
-                                           d["acc"], d["cacc"], d["status"], *scratch)
+        in_shared = (SHARED_ARRAYS * n + threads) * 8 <= SHARED_BYTES and self.shared
+        shared_bytes = ((SHARED_ARRAYS * n if in_shared else 0) + threads) * 8
+        scratch = [cuda.device_array((1, 1) if in_shared else (b, n), stream=stream) for _ in range(4)]
+        advance_kernel[b, threads, stream, shared_bytes](
+            d["x"], d["u"], d["X"], d["U"], d["step"], d["params"], d["sites"], d["vstar"], d["n_contacts"],
+            d["ysolve"], n_samples, sample_steps, d["out"], d["acc"], d["cacc"], d["status"], *scratch, int(in_shared))
         for name in ("x", "u", "X", "U", "step", "status", "ysolve"):
             d[name].copy_to_host(getattr(batch, name), stream=stream)
         res = [d[k].copy_to_host(stream=stream) for k in ("out", "acc", "cacc")]
@@ -229,4 +273,4 @@ class CUDABackend:
 
 GPUBackend = CUDABackend  # the name used before 0.2
 
-__all__ = ["CUDABackend", "GPUBackend", "THREADS_MAX", "cuda_available"]
+__all__ = ["CUDABackend", "GPUBackend", "SHARED_ARRAYS", "THREADS_MAX", "cuda_available"]
