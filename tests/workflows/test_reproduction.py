@@ -13,7 +13,7 @@ from slipchain import make_config
 from slipchain.analysis.fig6 import contact_law_dataset
 from slipchain.plots.paper import plot_fig5, plot_fig6
 from slipchain.workflows.reproduce import write_outputs
-from slipchain.analysis.fig6 import convergence, dashed_line, evaluate
+from slipchain.analysis.fig6 import convergence, dashed_line, evaluate, fig6_figure_data
 from slipchain.analysis.statistics import main_selection, seed_average
 from slipchain.sweeps.executor import run_sweep
 from slipchain.sweeps.store import Store
@@ -73,7 +73,7 @@ def test_claims_pass_and_fail_on_planted_data(tmp_path):
     assert claims[1].numbers["drops"][0]["eta_c"] == 1e5
     assert claims[1].numbers["drops"][0]["ratio"] == pytest.approx(0.75, abs=1e-9)
     assert claims[1].numbers["drops"][1]["ratio"] == pytest.approx(0.95, abs=1e-9)
-    assert {p.name for p in plot_fig6(planted, tmp_path)} == {"fig6.png", "fig6.pdf"}
+    assert {p.name for p in plot_fig6(fig6_figure_data(planted), tmp_path)} == {"fig6.png", "fig6.pdf"}
     # drop too small, order reversed, and v_d2 off the dashed line: each claim fails
     bad = evaluate(_planted(0.1, 0.2, 0.90))
     assert [c.passed for c in bad] == [False, False]

@@ -65,6 +65,18 @@ def fig6_table(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, Any]]:
     return seed_average(sub), sel
 
 
+def fig6_figure_data(ds: xr.Dataset) -> xr.Dataset:
+    """What Fig. 6 draws: the seed-averaged table of :func:`fig6_table` (``mu``, ``err``, ``n``) with,
+    in its attrs, v_d1 and v_d2, the dashed line f(v_d2, v0)/(epsilon f0) (NaN with one v_d), the
+    main chain length (0 if N is not swept), omega0 and the values at which other dimensions are held."""
+    cfg = base_config(ds)
+    avg, sel = fig6_table(ds)
+    v_d1, v_d2 = drive_velocities(cfg, avg["v_d"].values)
+    return avg.assign_attrs(v_d1=v_d1, v_d2=v_d2, dashed_line=dashed_line(cfg, v_d2) if v_d2 != v_d1 else float("nan"),
+                            n_main=main_n(avg) or 0, omega0=cfg.omega0,
+                            held=", ".join(f"{k} = {v:g}" for k, v in sel.items()))
+
+
 @dataclass
 class Claim:
     """One statement of the paper, what we measured, and whether the issue's criterion holds."""
@@ -206,4 +218,4 @@ def eta_label(ec: float) -> str:
 
 
 __all__ = ["Claim", "DROP_RATIO_MAX", "FIG5_ETA_FACTORS", "V_D2_TOLERANCE", "contact_law_dataset", "convergence",
-           "dashed_line", "eta_label", "evaluate", "fig6_table"]
+           "dashed_line", "eta_label", "evaluate", "fig6_figure_data", "fig6_table"]

@@ -47,7 +47,7 @@ from ..model.system import State, System
 from ..results.io import read_dataset
 from ..results.observables import SLOW_FRACTION
 from ..results.schema import Status
-from .statistics import main_n, main_selection
+from .statistics import base_config, main_n, main_selection, seed_average
 
 STICK_FRACTION = 0.05
 SLIP_THRESHOLD = 2.0
@@ -113,6 +113,32 @@ def stick_slip_dataset(store) -> xr.Dataset:
     out["mu_star"] = (ds["mu_star"].dims, frac, {"long_name": "fraction of contacts that stick-slip"})
     out["mu_star_sem"] = (ds["mu_star"].dims, err, {"long_name": "binomial standard error"})
     return out
+
+
+def stick_slip_average(stick_slip: xr.Dataset) -> xr.Dataset:
+    """Seed means of the stick-slip fraction (:func:`stick_slip_dataset`) at the main values of the
+    dimensions outside Fig. 6 and the main N; attrs: omega0 and the base eta_c (for the symbols)."""
+    cfg = base_config(stick_slip)
+    sel = main_selection(stick_slip)
+    avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
+    if "N" in avg.dims:
+        avg = avg.sel(N=main_n(avg))
+    return avg.assign_attrs(omega0=cfg.omega0, eta_c=cfg.eta_c)
+
+
+def velocity_figure_data(ds: xr.Dataset, points: int = 200) -> xr.Dataset:
+    """mu_star(v_d) seed means at the main values of other dimensions (the first value of any that
+    remain besides v_d and theta), with the single-contact law f(v, v0)/(epsilon f0) on a ``v`` grid
+    spanning the swept v_d; attrs: the smallest v* = v0 10**-delta and the values held."""
+    cfg = base_config(ds)
+    sel = main_selection(ds)
+    avg = seed_average(ds.sel(sel) if sel else ds)
+    other = [d for d in avg["mu"].dims if d not in ("v_d", "theta")]
+    sub = avg.isel({d: 0 for d in other}) if other else avg
+    v = np.geomspace(float(avg["v_d"].min()), float(avg["v_d"].max()), points)
+    law = cfg.contact_law.force(v, cfg.v0) / (cfg.epsilon * cfg.f0)
+    return sub.assign(law=("v", law)).assign_coords(v=v).assign_attrs(
+        vstar_min=cfg.v0 * 10 ** -cfg.delta, held=", ".join(f"{d} = {sub[d].item():g}" for d in other))
 
 
 # --- field recordings --------------------------------------------------------------------------
@@ -260,4 +286,4 @@ def load_mechanism(store) -> list[xr.Dataset]:
 
 __all__ = ["MECHANISM", "SLIP_THRESHOLD", "STICK_FRACTION", "classify_series", "contact_classes", "load_mechanism",
            "mechanism_members", "median_frequency", "record_field", "slip_events", "spectra", "state_from_run",
-           "stick_slip_dataset", "stick_slip_fraction"]
+           "stick_slip_average", "stick_slip_dataset", "stick_slip_fraction", "velocity_figure_data"]

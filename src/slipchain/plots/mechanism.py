@@ -10,27 +10,23 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..analysis.statistics import base_config, main_n, main_selection, seed_average
+from ..analysis.statistics import base_config
 from .common import ETA_STYLE, pyplot, save_figure
 
 
-def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str | os.PathLike) -> list[Path]:
+def plot_mechanism(avg: xr.Dataset, analyses: list[xr.Dataset], out: str | os.PathLike) -> list[Path]:
     """Stick-slip fraction versus theta, per-contact forces, event sizes and spectra (low and high theta).
 
-    ``stick_slip``: :func:`slipchain.analysis.mechanism.stick_slip_dataset` of a Fig. 6-like store;
+    ``avg``: :func:`slipchain.analysis.mechanism.stick_slip_average` of a Fig. 6-like store;
     ``analyses``: the stored analyses of :func:`slipchain.analysis.mechanism.mechanism_members`.
     """
     plt = pyplot()
     paths: list[Path] = []
-    cfg = base_config(stick_slip)
-    sel = main_selection(stick_slip)
-    avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
-    if "N" in avg.dims:
-        avg = avg.sel(N=main_n(avg))
+    omega0 = avg.attrs["omega0"]
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     v_values = sorted(avg["v_d"].values.tolist(), reverse=True)
     for ec in sorted(avg["eta_c"].values.tolist(), reverse=True) if "eta_c" in avg.dims else [None]:
-        factor = round(ec / cfg.omega0, 3) if ec is not None else cfg.eta_c / cfg.omega0
+        factor = round(ec / omega0, 3) if ec is not None else avg.attrs["eta_c"] / omega0
         color, marker = ETA_STYLE.get(factor, ("tab:gray", "^"))
         for vd in v_values:
             cur = avg.sel(v_d=vd, **({} if ec is None else {"eta_c": ec})).dropna("theta", subset=["mu"])
@@ -111,31 +107,24 @@ def plot_mechanism(stick_slip: xr.Dataset, analyses: list[xr.Dataset], out: str 
     return paths
 
 
-def plot_velocity(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
-    """mu_star versus v_d (log axis), one curve per theta: the model's Figs. 2 and 3."""
+def plot_velocity(data: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """mu_star versus v_d (log axis), one curve per theta: the model's Figs. 2 and 3
+    (``data``: :func:`slipchain.analysis.mechanism.velocity_figure_data`)."""
     plt = pyplot()
-    sel = main_selection(ds)
-    avg = seed_average(ds.sel(sel) if sel else ds)
-    cfg = base_config(ds)
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    other = [d for d in avg["mu"].dims if d not in ("v_d", "theta")]
-    sub = avg.isel({d: 0 for d in other}) if other else avg
-    thetas = sub["theta"].values.tolist() if "theta" in sub.dims else [None]
+    thetas = data["theta"].values.tolist() if "theta" in data.dims else [None]
     colors = plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))
     for th, color in zip(thetas, colors):
-        cur = (sub.sel(theta=th) if th is not None else sub).dropna("v_d", subset=["mu"])
+        cur = (data.sel(theta=th) if th is not None else data).dropna("v_d", subset=["mu"])
         ax.errorbar(cur["v_d"], cur["mu"], yerr=cur["err"], color=color, marker="o", capsize=2,
                     label=rf"$\theta$ = {th:g}" if th is not None else "model")
-    v = np.geomspace(float(avg["v_d"].min()), float(avg["v_d"].max()), 200)
-    ax.plot(v, cfg.contact_law.force(v, cfg.v0) / (cfg.epsilon * cfg.f0), color="0.5", ls=":",
-            label=r"$f(v, v_0)/(\varepsilon f_0)$")
-    ax.axvline(cfg.v0 * 10 ** -cfg.delta, color="0.7", lw=0.8, ls="--",
-               label=r"smallest $v^*$ = $v_0\,10^{-\delta}$")
+    ax.plot(data["v"], data["law"], color="0.5", ls=":", label=r"$f(v, v_0)/(\varepsilon f_0)$")
+    ax.axvline(data.attrs["vstar_min"], color="0.7", lw=0.8, ls="--", label=r"smallest $v^*$ = $v_0\,10^{-\delta}$")
     ax.set_xscale("log")
     ax.set_xlabel(r"$v_d$ (m/s)")
     ax.set_ylabel(r"$\mu^*$")
-    ax.set_title(r"$\mu^*(v_d)$ at several loads" + (f" ({', '.join(f'{d} = {sub[d].item():g}' for d in other)})"
-                                                      if other else ""), fontsize=10)
+    ax.set_title(r"$\mu^*(v_d)$ at several loads" + (f" ({data.attrs['held']})" if data.attrs["held"] else ""),
+                 fontsize=10)
     ax.legend(fontsize=8)
     return save_figure(fig, out, "velocity")
 

@@ -3,7 +3,8 @@
 * Fig. 5: :func:`plot_fig5` draws :func:`slipchain.analysis.fig6.contact_law_dataset` (eq. (1),
   f(v, v0), for several contact dampings and the contact average) on a log-v axis, in units of
   epsilon*f0.
-* Fig. 6: :func:`plot_fig6` draws seed-averaged mu_star versus theta from a sweep Dataset:
+* Fig. 6: :func:`plot_fig6` draws seed-averaged mu_star versus theta
+  (:func:`slipchain.analysis.fig6.fig6_figure_data` of a sweep Dataset):
   eta_c = omega0 blue circles, 0.3 omega0 red diamonds, 0.1 omega0 black squares (as the paper),
   filled for v_d1 = v0, open for v_d2; N = 1001 as stars; the dashed line f(v_d2, v0)/(epsilon f0).
 
@@ -17,8 +18,6 @@ from pathlib import Path
 
 import xarray as xr
 
-from ..analysis.fig6 import dashed_line, fig6_table
-from ..analysis.statistics import base_config, drive_velocities, main_n
 from .common import ETA_STYLE, pyplot, save_figure
 
 
@@ -46,21 +45,20 @@ def plot_fig5(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     return save_figure(fig, out, "fig5")
 
 
-def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
-    """Fig. 6: seed-averaged mu_star versus theta from a sweep Dataset (see module docstring)."""
-    plt = pyplot()
-    cfg = base_config(ds)
-    avg, sel = fig6_table(ds)
-    v_values = sorted(avg["v_d"].values.tolist())
-    v_d1, v_d2 = drive_velocities(cfg, v_values)
-    ns = avg["N"].values.tolist() if "N" in avg.dims else [None]
-    n_main = main_n(avg)
-    fig, ax = plt.subplots(figsize=(8.2, 4.8))
-    handles = []
+def plot_fig6(data: xr.Dataset, out: str | os.PathLike) -> list[Path]:
+    """Fig. 6: seed-averaged mu_star versus theta (``data``: :func:`slipchain.analysis.fig6.fig6_figure_data`)."""
     from matplotlib.lines import Line2D
 
+    plt = pyplot()
+    avg = data
+    v_values = sorted(avg["v_d"].values.tolist())
+    v_d1, v_d2 = avg.attrs["v_d1"], avg.attrs["v_d2"]
+    ns = avg["N"].values.tolist() if "N" in avg.dims else [None]
+    n_main = avg.attrs["n_main"] or None
+    fig, ax = plt.subplots(figsize=(8.2, 4.8))
+    handles = []
     for ec in sorted(avg["eta_c"].values.tolist(), reverse=True):
-        factor = round(ec / cfg.omega0, 3)
+        factor = round(ec / avg.attrs["omega0"], 3)
         color, marker = ETA_STYLE.get(factor, ("tab:gray", "^"))
         handles.append(Line2D([], [], color=color, marker=marker, label=rf"$\eta_c$ = {factor:g} $\omega_0$"))
         for vd in sorted(v_values, reverse=True):
@@ -81,15 +79,15 @@ def plot_fig6(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
         handles.append(Line2D([], [], color="0.3", marker="*", ms=11, ls="none",
                               label="stars: N = " + ", ".join(str(n) for n in ns if n != n_main)))
     if v_d2 != v_d1:
-        line = dashed_line(cfg, v_d2)
+        line = avg.attrs["dashed_line"]
         ax.axhline(line, color="0.3", ls="--", lw=1)
         handles.append(Line2D([], [], color="0.3", ls="--", label=rf"$f(v_{{d2}}, v_0)/(\varepsilon f_0)$ = {line:.3f}"))
     ax.set_xlabel(r"$\theta$ (proportional to the load)")
     ax.set_ylabel(r"$\mu^* = \langle f_d \rangle / (\varepsilon f_0 \theta)$")
     ax.set_xlim(0, 1.05)
-    extra = ", ".join(f"{k} = {v:g}" for k, v in sel.items())
     n_text = f"N = {n_main}" if n_main is not None else ""
-    ax.set_title("Fig. 6: friction versus load" + (f" ({', '.join(x for x in (n_text, extra) if x)})"), fontsize=10)
+    ax.set_title("Fig. 6: friction versus load" + (f" ({', '.join(x for x in (n_text, avg.attrs['held']) if x)})"),
+                 fontsize=10)
     ax.legend(handles=handles, fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
     return save_figure(fig, out, "fig6")
 

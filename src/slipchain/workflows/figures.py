@@ -9,7 +9,8 @@ import pandas as pd
 import xarray as xr
 
 from ..analysis.experiment import model_overlay
-from ..analysis.fig6 import contact_law_dataset
+from ..analysis.fig6 import contact_law_dataset, fig6_figure_data
+from ..analysis.mechanism import velocity_figure_data
 from ..analysis.reports import epsilon_lines
 from ..analysis.statistics import epsilon_table
 from ..model.config import load_config
@@ -34,11 +35,11 @@ def fig5(out: str | os.PathLike, config: str | os.PathLike | None = None, seed: 
 
 
 def fig6(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
-    return plot_fig6(sweep_dataset(store, {"theta", "eta_c", "v_d"}, "fig6"), out)
+    return plot_fig6(fig6_figure_data(sweep_dataset(store, {"theta", "eta_c", "v_d"}, "fig6")), out)
 
 
 def velocity(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
-    return plot_velocity(sweep_dataset(store, {"v_d"}, "the velocity figure"), out)
+    return plot_velocity(velocity_figure_data(sweep_dataset(store, {"v_d"}, "the velocity figure")), out)
 
 
 def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:

@@ -15,7 +15,8 @@ from pathlib import Path
 import xarray as xr
 
 from ..analysis.mechanism import (MECHANISM, contact_classes, load_mechanism, mechanism_members, record_field,
-                                  slip_events, spectra, state_from_run, stick_slip_dataset, stick_slip_fraction)
+                                  slip_events, spectra, state_from_run, stick_slip_average, stick_slip_dataset,
+                                  stick_slip_fraction)
 from ..analysis.reports import mechanism_summary
 from ..engine.backends import BackendName
 from ..model.system import build_system
@@ -77,7 +78,7 @@ def mechanism_figures(store: str | os.PathLike, out: str | os.PathLike) -> list[
     st = Store.open(store)
     analyses = load_mechanism(st)
     ss = stick_slip_dataset(st)
-    paths = plot_mechanism(ss, analyses, out)
+    paths = plot_mechanism(stick_slip_average(ss), analyses, out)
     report = write_text_atomic(Path(out) / "mechanism.md", mechanism_summary(ss, analyses) + "\n" + "\n".join(
         f"![{p.name}]({p.name})" for p in paths if p.suffix == ".png") + "\n")
     return [*paths, report]

@@ -10,7 +10,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..analysis.fig6 import contact_law_dataset, convergence, evaluate
+from ..analysis.fig6 import contact_law_dataset, convergence, evaluate, fig6_figure_data
 from ..analysis.reports import report_markdown
 from ..analysis.statistics import base_config
 from ..engine.backends import BackendName
@@ -55,7 +55,7 @@ def write_outputs(st: Store, out: Path, *, command: str) -> tuple[Path, list[Pat
     wall = sum(r.get("wall_time_s", 0.0) for r in runs)
     ds.attrs["invocations"] = len(runs)
     ds.attrs["workers"] = ", ".join(sorted({str(r.get("n_workers") or r.get("scheduler")) for r in runs}))
-    figures = plot_fig5(contact_law_dataset(base_config(ds)), out) + plot_fig6(ds, out)
+    figures = plot_fig5(contact_law_dataset(base_config(ds)), out) + plot_fig6(fig6_figure_data(ds), out)
     text = report_markdown(ds, evaluate(ds), convergence(ds), command=command, wall_time_s=wall or None,
                            figures=[p.name for p in figures if p.suffix == ".png"])
     return write_text_atomic(out / "report.md", text), figures
