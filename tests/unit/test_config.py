@@ -89,3 +89,32 @@ def test_cli_rejects_bad_config_and_writes_nothing(tmp_path):
     assert proc.returncode == 2
     assert "'theta'" in proc.stderr and "1.5" in proc.stderr and "(0, 1]" in proc.stderr
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_backend_is_not_a_config_key_but_old_files_with_it_still_load(tmp_path):
+    from slipchain.model.config import config_from_toml
+    from slipchain.sweeps.definition import make_sweep, member_id
+    from slipchain.sweeps.store import Store
+
+    with pytest.raises(ConfigError, match="config key 'backend' .* is no longer accepted: how a run is executed"):
+        make_config(backend="gpu")
+    # a run file of 0.1 carries `backend = "cpu"` in its config attribute
+    old = make_config(theta=0.5).to_toml() + 'backend = "cpu"\n'
+    assert config_from_toml(old) == make_config(theta=0.5)
+    # a store written by 0.1 has backend in its sweep.toml's [base]; its member ids are what 0.1 computed
+    sweep = make_sweep({"base": {"N": 11}, "grid": {"theta": [0.5, 1.0]}})
+    store = tmp_path / "store"
+    Store.open(store, sweep)
+    text = (store / "sweep.toml").read_text().replace("[base]\n", '[base]\nbackend = "cpu"\n')
+    (store / "sweep.toml").write_text(text)
+    reopened = Store.open(store, sweep)
+    assert [m.id for m in reopened.sweep.members] == [m.id for m in sweep.members]
+    # frozen reference: the ids that 0.1 wrote into the committed index of the paper preset
+    import csv
+    from pathlib import Path
+
+    from slipchain.sweeps.definition import load_preset
+
+    index = Path(__file__).resolve().parents[2] / "docs" / "fig6-paper" / "index.csv"
+    frozen = {row["member_id"] for row in csv.DictReader(index.open())}
+    assert {member_id(m.config) for m in load_preset("paper").members} == frozen and len(frozen) == 368
