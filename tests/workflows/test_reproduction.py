@@ -161,3 +161,21 @@ def test_reproduce_rejects_an_unknown_preset_and_fig6_needs_a_store(tmp_path):
     none = subprocess.run([sys.executable, "-m", "slipchain", "figure", "fig6", "--store", str(tmp_path / "x"),
                            "--out", str(tmp_path)], capture_output=True, text=True, timeout=60)
     assert none.returncode == 2 and "not a slipchain sweep store" in none.stderr
+
+
+def test_report_counts_a_gpu_batch_once_in_the_run_time():
+    # Members of a GPU batch all record the batch's wall time: summing them would count it per member.
+    from slipchain.analysis.reports import run_time_text
+
+    def ds(walls, backends, status=None):
+        n = len(walls)
+        return xr.Dataset({"wall_time_s": ("m", np.array(walls, float)), "backend": ("m", np.array(backends)),
+                           "status": ("m", np.array(status or ["completed"] * n))})
+
+    assert run_time_text(ds([60.0, 120.0, 5.0], ["cpu", "cpu", "cpu"], ["completed", "completed", "diverged"])) == \
+        "the sum of the members' run times is 3.0 CPU-minutes"
+    assert run_time_text(ds([60.0, 120.0], ["", ""])) == "the sum of the members' run times is 3.0 CPU-minutes"  # 0.1 stores
+    gpu = run_time_text(ds([90.0, 90.0, 90.0, 30.0], ["gpu"] * 4))
+    assert gpu.startswith("4 members ran on the GPU in 2 batch(es) whose wall times add up to 2.0 min")
+    mixed = run_time_text(ds([60.0, 90.0, 90.0], ["cpu", "gpu", "gpu"]))
+    assert mixed.startswith("the sum of the members' run times is 1.0 CPU-minutes (1 members); 2 members ran on the GPU in 1 batch(es)")

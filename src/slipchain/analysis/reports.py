@@ -24,7 +24,6 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
     cfg = base_config(ds)
     n_done = int((ds["status"] == Status.COMPLETED).sum())
     n_total = int((ds["status"] != "absent").sum())
-    members_wall = float(ds["wall_time_s"].where(ds["status"] == Status.COMPLETED).sum())
     lines = [
         "# Reproduction of Fig. 6: friction versus load",
         "",
@@ -33,7 +32,7 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
         "",
         f"- Command: `{command}`",
         f"- Sweep `{ds.attrs.get('sweep_name')}` (digest {ds.attrs.get('sweep_digest')}): {n_done} of {n_total} members "
-        f"completed; the sum of the members' run times is {members_wall / 60:.1f} CPU-minutes"
+        f"completed; {run_time_text(ds)}"
         + (f"; wall time of the sweep {wall_time_s / 60:.1f} min with {ds.attrs.get('workers', '?')} local worker "
            f"process(es) ({ds.attrs.get('invocations', 1)} invocation(s) that ran members, from the store's "
            "invocations.jsonl)." if wall_time_s is not None else "."),
@@ -70,6 +69,21 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
     return "\n".join(lines) + "\n"
+
+
+def run_time_text(ds: xr.Dataset) -> str:
+    """How long the completed members took. A member computed on the GPU records the wall time of
+    its batch (up to 256 members advanced together), so GPU members count each batch once."""
+    done = (ds["status"] == Status.COMPLETED).values
+    wall = np.nan_to_num(ds["wall_time_s"].values[done])
+    on_gpu = (ds["backend"].values[done] == "gpu") if "backend" in ds else np.zeros(wall.shape, bool)
+    text = f"the sum of the members' run times is {wall[~on_gpu].sum() / 60:.1f} CPU-minutes"
+    if not on_gpu.any():
+        return text
+    batches = np.unique(wall[on_gpu])  # members of one batch share its wall time
+    gpu = (f"{int(on_gpu.sum())} members ran on the GPU in {batches.size} batch(es) whose wall times add up to "
+           f"{batches.sum() / 60:.1f} min (batches run concurrently; a member records its batch's wall time)")
+    return gpu if on_gpu.all() else f"{text} ({int((~on_gpu).sum())} members); {gpu}"
 
 
 def _versions(ds: xr.Dataset) -> str:
@@ -149,4 +163,4 @@ def epsilon_lines(avg: xr.Dataset) -> list[str]:
             f"{d['theta_max']:g}; ratio {d['ratio']:.3f} ± {d['ratio_err']:.3f}" for d in load_drops(avg, "epsilon")]
 
 
-__all__ = ["epsilon_lines", "mechanism_summary", "report_markdown"]
+__all__ = ["epsilon_lines", "mechanism_summary", "report_markdown", "run_time_text"]

@@ -158,6 +158,7 @@ class Store:
         ids = np.full(shape, "", dtype=object)
         version = np.full(shape, "", dtype=object)
         vstatus = np.full(shape, "", dtype=object)
+        backend = np.full(shape, "", dtype=object)
         for m in sw.members:
             idx = tuple(coords[d].index(v) for d, v in m.point)
             ids[idx] = m.id
@@ -169,6 +170,7 @@ class Store:
             message[idx] = attrs.get("message", "")
             version[idx] = attrs.get("slipchain_version", "")
             vstatus[idx] = attrs.get("velocity_status", "")
+            backend[idx] = attrs.get("backend", "")
             for k, (attr, _) in SUMMARY_VARS.items():
                 if attr in attrs:
                     data[k][idx] = float(attrs[attr])
@@ -181,6 +183,7 @@ class Store:
         ds["message"] = (dims, message.astype(str))
         ds["member_id"] = (dims, ids.astype(str))
         ds["slipchain_version"] = (dims, version.astype(str))
+        ds["backend"] = (dims, backend.astype(str))
         if (vstatus != "").any():
             ds["velocity_status"] = (dims, vstatus.astype(str))
         ds.attrs.update(sweep_name=sw.name, sweep_digest=sw.digest, store=str(self.path), definition=sw.to_toml())
