@@ -44,6 +44,31 @@ def test_cuda_kernel_agrees_with_the_cpu_kernel_step_by_step():
     assert bc.step[:3].tolist() == bg.step[:3].tolist() == [80, 80, 80]
 
 
+@pytest.mark.cuda
+def test_cuda_chunks_reuse_device_buffers_and_see_host_changes():
+    # The CUDA backend keeps a batch's device arrays from chunk to chunk (no allocation between
+    # chunks), yet the host batch stays the truth: two chunks equal one of twice the length, and a
+    # row the driver marks finished between chunks is skipped.
+    systems = [build_system(c) for c in CONFIGS[:3]]
+    states = [initial_state(s) for s in systems]
+    gpu = get_backend("gpu")
+    one, two = Batch.pack(systems, states), Batch.pack(systems, states)
+    o1 = gpu.advance(one, 8, 10)
+    a = gpu.advance(two, 4, 10)
+    buffers = two.__dict__.get("_cuda_buffers")
+    b = gpu.advance(two, 4, 10)
+    assert buffers is not None and two.__dict__.get("_cuda_buffers") is buffers
+    for name in ("x", "u", "X", "U", "ysolve", "step"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
+    np.testing.assert_array_equal(o1.out, np.concatenate([a.out, b.out], axis=1))
+    np.testing.assert_allclose(o1.cacc, a.cacc + b.cacc, rtol=1e-13, atol=0)  # (sums grouped differently)
+    x0 = two.x[0].copy()
+    two.status[0] = two.step[0]  # finished: the kernel must skip row 0 from now on
+    gpu.advance(two, 4, 10)
+    np.testing.assert_array_equal(two.x[0], x0)
+    assert two.step[1] == two.step[2] == 120 and two.step[0] == 80
+
+
 def test_runs_on_a_backend_match_the_cpu(backend):
     # Over 80 steps (simulator) the backends agree to round-off; over 1000 steps (CPU, a real GPU)
     # round-off differences (CPU fastmath reassociation, GPU fused multiply-adds) grow through the

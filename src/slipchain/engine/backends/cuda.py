@@ -18,7 +18,9 @@ chains keep them in global memory (same device function, other array arguments).
 Per-sample outputs (mean f_d, mean x, mean X) are reduced across the block in shared memory
 once per sample; work and per-contact sums stay in registers/global memory. No per-step launch
 or host round trip: the host copies the batch in and out once per call of :meth:`CUDABackend.advance`
-(a chunk of 0.5 ms of simulated time in :func:`slipchain.engine.simulate.simulate`).
+(a chunk of 0.5 ms of simulated time in :func:`slipchain.engine.simulate.simulate`), into device
+arrays and a CUDA stream allocated on a batch's first chunk and kept with the batch (no device
+allocation or free between chunks, which could synchronise concurrent batches).
 
 Why numba.cuda and not CuPy raw kernels: the scheme is numba-compiled Python already; numba.cuda
 compiles the same functions for the device (no second implementation in CUDA C), and its
@@ -245,30 +247,62 @@ class CUDABackend:
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
         b, n = batch.x.shape
-        cmax = batch.sites.shape[1]
         threads = self.threads or min(self.default_threads(b), max(1, n))
-        out = np.zeros((b, n_samples, S.N_OUT))
-        acc = np.zeros((b, S.N_ACC))
-        cacc = np.zeros((b, S.N_CACC, cmax))
-        # A stream of its own per call: batches advanced from several threads of one process (the
-        # sweep's GPU worker) run concurrently on the device.
-        with _INIT_LOCK:
-            stream = cuda.stream()  # (activates this thread's context under the lock)
-        d = {k: cuda.to_device(np.ascontiguousarray(v), stream=stream) for k, v in dict(
-            x=batch.x, u=batch.u, X=batch.X, U=batch.U, step=batch.step, params=batch.params, sites=batch.sites,
-            vstar=batch.vstar, n_contacts=batch.n_contacts, ysolve=batch.ysolve, out=out, acc=acc, cacc=cacc,
-            status=batch.status).items()}
         in_shared = (SHARED_ARRAYS * n + threads) * 8 <= SHARED_BYTES and self.shared
         shared_bytes = ((SHARED_ARRAYS * n if in_shared else 0) + threads) * 8
-        scratch = [cuda.device_array((1, 1) if in_shared else (b, n), stream=stream) for _ in range(4)]
+        dev = _device_buffers(batch, in_shared)
+        stream, d = dev.stream, dev.arrays
+        # The host batch is the truth between calls (the driver changes params and status, observers
+        # read the state), so everything is copied in and out, but into buffers allocated once per
+        # batch: no device allocation or free between chunks (see _DeviceBuffers).
+        for name in _STATE:
+            d[name].copy_to_device(np.ascontiguousarray(getattr(batch, name)), stream=stream)
+        if dev.zeros["out"].shape[1] != n_samples:  # (the chunk length changes rarely: a row's last chunk, a ramp)
+            dev.zeros["out"] = np.zeros((b, n_samples, S.N_OUT))
+            d["out"] = cuda.device_array_like(dev.zeros["out"], stream=stream)
+        for name in ("out", "acc", "cacc"):  # the kernel adds to these
+            d[name].copy_to_device(dev.zeros[name], stream=stream)
         advance_kernel[b, threads, stream, shared_bytes](
             d["x"], d["u"], d["X"], d["U"], d["step"], d["params"], d["sites"], d["vstar"], d["n_contacts"],
-            d["ysolve"], n_samples, sample_steps, d["out"], d["acc"], d["cacc"], d["status"], *scratch, int(in_shared))
+            d["ysolve"], n_samples, sample_steps, d["out"], d["acc"], d["cacc"], d["status"], *dev.scratch,
+            int(in_shared))
         for name in ("x", "u", "X", "U", "step", "status", "ysolve"):
             d[name].copy_to_host(getattr(batch, name), stream=stream)
         res = [d[k].copy_to_host(stream=stream) for k in ("out", "acc", "cacc")]
         stream.synchronize()
         return ChunkOutput(*res)
+
+
+_STATE = ("x", "u", "X", "U", "step", "params", "sites", "vstar", "n_contacts", "ysolve", "status")
+
+
+class _DeviceBuffers:
+    """A batch's device arrays and CUDA stream, allocated on its first chunk and reused for every
+    later one. Why: allocating and freeing device memory per chunk (cuda.to_device, numba's
+    deferred cuMemFree) may synchronise the whole device, so batches advanced from several threads
+    (the sweep's GPU worker) would wait for each other's kernels instead of overlapping."""
+
+    def __init__(self, batch: Batch, in_shared: bool):
+        b, n = batch.x.shape
+        with _INIT_LOCK:
+            self.stream = cuda.stream()  # (activates this thread's context under the lock)
+        self.key = (batch.x.shape, batch.sites.shape, batch.ysolve.shape, in_shared)
+        self.arrays = {name: cuda.device_array_like(np.ascontiguousarray(getattr(batch, name)), stream=self.stream)
+                       for name in _STATE}
+        self.zeros = {"out": np.zeros((b, 0, S.N_OUT)), "acc": np.zeros((b, S.N_ACC)),
+                      "cacc": np.zeros((b, S.N_CACC, batch.sites.shape[1]))}
+        for name, z in self.zeros.items():
+            self.arrays[name] = cuda.device_array_like(z, stream=self.stream)
+        self.scratch = [cuda.device_array((1, 1) if in_shared else (b, n), stream=self.stream) for _ in range(4)]
+
+
+def _device_buffers(batch: Batch, in_shared: bool) -> _DeviceBuffers:
+    """The batch's :class:`_DeviceBuffers` (kept on the batch object, so they live and die with it)."""
+    dev = batch.__dict__.get("_cuda_buffers")
+    if dev is None or dev.key != (batch.x.shape, batch.sites.shape, batch.ysolve.shape, in_shared):
+        dev = _DeviceBuffers(batch, in_shared)
+        batch.__dict__["_cuda_buffers"] = dev
+    return dev
 
 
 GPUBackend = CUDABackend  # the name used before 0.2
