@@ -232,11 +232,12 @@ class CUDABackend:
 
     name = "gpu"
 
-    def __init__(self, threads: int | None = None, shared: bool = True):
+    def __init__(self, threads: int | None = None, shared: bool = True, keep_buffers: bool = True):
         if not cuda_available():
             raise RuntimeError("backend 'gpu' needs a CUDA GPU (numba.cuda found none); use backend 'cpu' or 'auto'")
         self.threads = threads
         self.shared = shared  # state in shared memory where it fits (N <= 736 at 256 threads)
+        self.keep_buffers = keep_buffers  # False: fresh device arrays every chunk (as before; for benchmarks)
 
     @staticmethod
     def default_threads(rows: int) -> int:
@@ -270,6 +271,8 @@ class CUDABackend:
             d[name].copy_to_host(getattr(batch, name), stream=stream)
         res = [d[k].copy_to_host(stream=stream) for k in ("out", "acc", "cacc")]
         stream.synchronize()
+        if not self.keep_buffers:
+            del batch.__dict__["_cuda_buffers"]
         return ChunkOutput(*res)
 
 
