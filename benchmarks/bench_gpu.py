@@ -5,6 +5,8 @@
     python benchmarks/bench_gpu.py --threads       # also: threads per CUDA block, state in shared vs global memory
     python benchmarks/bench_gpu.py --agreement     # also: full runs on GPU and CPU (reference point, a v_d2 point)
     python benchmarks/bench_gpu.py --paper         # also: slipchain reproduce --preset paper --backend gpu
+    python benchmarks/bench_gpu.py --batches "" --concurrent   # only: do batches in threads overlap on the GPU?
+    python benchmarks/bench_gpu.py --n 1001 --batches 1,72 --thread-list 256,512,1024   # N = 1001 (global memory)
 
 Block-steps per second = batch size * N * steps / wall time (one step advances both layers of
 N blocks; the CPU benchmark counts 2N, here N, as issue 16 asks for block-steps of the chain),
@@ -29,9 +31,13 @@ from slipchain.engine.backends import Batch, CPUBackend, get_backend
 from slipchain.engine.backends.cuda import CUDABackend
 
 
+def make_batch(batch_size: int, n: int = 301, seed0: int = 0) -> Batch:
+    systems = [build_system(make_config(N=n, theta=1.0, start="steady", seed=seed0 + s)) for s in range(batch_size)]
+    return Batch.pack(systems, [initial_state(s) for s in systems])
+
+
 def throughput(backend, batch_size: int, steps: int, n: int = 301) -> float:
-    systems = [build_system(make_config(N=n, theta=1.0, start="steady", seed=s)) for s in range(batch_size)]
-    batch = Batch.pack(systems, [initial_state(s) for s in systems])
+    batch = make_batch(batch_size, n)
     backend.advance(batch, 1, 100)  # compile / warm up
     chunk = max(1, steps // 40)
     t0 = time.perf_counter()
@@ -39,6 +45,39 @@ def throughput(backend, batch_size: int, steps: int, n: int = 301) -> float:
     wall = time.perf_counter() - t0
     assert (batch.status < 0).all(), "a row went non-finite"
     return batch_size * n * (steps // chunk) * chunk / wall
+
+
+def chunked(backend, batch: Batch, chunks: int, samples: int, sample_steps: int) -> float:
+    """Advance ``batch`` by ``chunks`` calls, as the driver does (a host round trip per chunk); wall time."""
+    t0 = time.perf_counter()
+    for _ in range(chunks):
+        backend.advance(batch, samples, sample_steps)
+    assert (batch.status < 0).all(), "a row went non-finite"
+    return time.perf_counter() - t0
+
+
+def concurrency(sizes: list[int], chunks: int, steps_per_chunk: int) -> None:
+    """Batches of ``sizes`` rows advanced one after the other, then from one thread each at once (as
+    the sweep's GPU worker runs GPU_THREADS batches), with device arrays kept per batch or fresh
+    every chunk. Overlap = sum of the sequential walls / concurrent wall (1: serialised; up to
+    len(sizes) while the batches together leave multiprocessors free)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    samples, sample_steps = 10, max(1, steps_per_chunk // 10)
+    for keep in (False, True):
+        backend = CUDABackend(keep_buffers=keep)
+        for b in sizes:  # compile and warm up for every thread-count variant
+            chunked(backend, make_batch(b), 1, 1, 10)
+        seq = [chunked(backend, make_batch(b, seed0=100 * i), chunks, samples, sample_steps) for i, b in enumerate(sizes)]
+        batches = [make_batch(b, seed0=100 * i) for i, b in enumerate(sizes)]
+        with ThreadPoolExecutor(len(sizes)) as pool:
+            t0 = time.perf_counter()
+            walls = list(pool.map(lambda bt: chunked(backend, bt, chunks, samples, sample_steps), batches))
+            conc = time.perf_counter() - t0
+        print(f"concurrency, device arrays {'kept per batch' if keep else 'fresh every chunk'}: batches {sizes} rows, "
+              f"{chunks} chunks of {samples * sample_steps} steps; sequential {' + '.join(f'{w:.2f}' for w in seq)} = "
+              f"{sum(seq):.2f} s; concurrent {conc:.2f} s (per batch {', '.join(f'{w:.2f}' for w in walls)}); "
+              f"overlap {sum(seq) / conc:.2f} (ideal {min(len(sizes), sum(seq) / max(seq)):.2f})", flush=True)
 
 
 def agreement(point: dict) -> dict:
@@ -68,14 +107,30 @@ def main() -> None:
     ap.add_argument("--threads", action="store_true")
     ap.add_argument("--agreement", action="store_true")
     ap.add_argument("--paper", action="store_true")
+    ap.add_argument("--n", type=int, default=301, help="blocks per chain for the throughput table")
+    ap.add_argument("--thread-list", default="", help="also: throughput at these threads per block (comma list)")
+    ap.add_argument("--concurrent", action="store_true", help="also: do batches in threads overlap on the GPU?")
+    ap.add_argument("--concurrent-sizes", default="16,16,16,16")
     args = ap.parse_args()
     gpu = get_backend("gpu")
-    cpu1 = throughput(CPUBackend(), 1, args.steps)
-    print(f"one CPU core (numba): {cpu1:.3e} block-steps/s", flush=True)
-    print(f"{'batch':>6} {'GPU block-steps/s':>18} {'ratio to 1 CPU core':>20} {'us per step':>12}", flush=True)
-    for b in (int(x) for x in args.batches.split(",")):
-        r = throughput(gpu, b, args.steps)
-        print(f"{b:>6} {r:>18.3e} {r / cpu1:>20.1f} {b * 301 / r * 1e6:>12.2f}", flush=True)
+    sizes = [int(x) for x in args.batches.split(",") if x]
+    if sizes:
+        cpu1 = throughput(CPUBackend(), 1, args.steps, args.n)
+        print(f"N = {args.n}; one CPU core (numba): {cpu1:.3e} block-steps/s", flush=True)
+        print(f"{'batch':>6} {'GPU block-steps/s':>18} {'ratio to 1 CPU core':>20} {'us per step':>12}", flush=True)
+        for b in sizes:
+            r = throughput(gpu, b, args.steps, args.n)
+            print(f"{b:>6} {r:>18.3e} {r / cpu1:>20.1f} {b * args.n / r * 1e6:>12.2f}", flush=True)
+    for th in (int(x) for x in args.thread_list.split(",") if x):
+        for b in sizes:
+            try:
+                r = throughput(CUDABackend(threads=th), b, args.steps, args.n)
+                print(f"N = {args.n}, threads per block {th:>4}, batch {b:>5}: {r:.3e} block-steps/s, "
+                      f"{b * args.n / r * 1e6:.2f} us per step", flush=True)
+            except Exception as e:  # e.g. too many registers for 1024 threads
+                print(f"N = {args.n}, threads per block {th:>4}, batch {b:>5}: failed: {type(e).__name__}: {e}", flush=True)
+    if args.concurrent:
+        concurrency([int(x) for x in args.concurrent_sizes.split(",")], chunks=40, steps_per_chunk=5000)
     if args.threads:
         for shared in (True, False):
             for th in (128, 256):
