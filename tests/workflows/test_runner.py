@@ -183,3 +183,35 @@ def test_batched_tasks_store_the_same_members(tmp_path, client):
     st = Store.open(tmp_path / "s")
     for m in sw.members[:3]:
         assert st.read_member(m).attrs["mu_star"] == run(m.config).attrs["mu_star"]
+
+
+class _SwallowingFinalizer:
+    """Delivers SIGINT to this process from inside ``__del__``: Python then raises the
+    KeyboardInterrupt inside the finalizer, prints "Exception ignored" and loses it, exactly what
+    happens when a Ctrl-C lands while a Dask future is being garbage-collected."""
+
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        for _ in range(1000):  # bytecodes for the handler to run in
+            pass
+
+
+def test_ctrl_c_swallowed_in_a_finalizer_still_stops_the_sweep(tmp_path, client, monkeypatch):
+    # Deterministic version of the Ctrl-C that CI once missed: the interrupt lands in a finalizer
+    # while the first member is stored. Before the SIGINT flag, the sweep ran to the end (exit 0).
+    sw = _sweep(seed=list(range(6)))
+    original = Store.write_member
+    calls = []
+
+    def write_member(self, member, ds):
+        calls.append(member.id)
+        path = original(self, member, ds)
+        if len(calls) == 1:
+            _SwallowingFinalizer()  # created and collected at once
+        return path
+
+    monkeypatch.setattr(Store, "write_member", write_member)
+    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
+    assert rep.interrupted and not rep.ok
+    assert 1 <= len(rep.ran) < 6 and len(Store.open(tmp_path / "s").completed_ids()) == len(rep.ran)
+    assert Store.open(tmp_path / "s").invocations()[-1]["interrupted"] is True

@@ -27,7 +27,9 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
 import sys
+import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -170,13 +172,8 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     pending = sorted(st.pending(), key=expected_cost, reverse=True)
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
-        if pending:
-            groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
-            if client is not None:
-                _execute(client, st, groups, report, bar, backend)
-            else:
-                with dask_client(scheduler, n_workers, threads) as c:
-                    _execute(c, st, groups, report, bar, backend)
+        with _interrupt_flag():
+            _run_groups(pending, batch_size, client, scheduler, n_workers, threads, st, report, bar, backend)
     except KeyboardInterrupt:
         report.interrupted = True
     finally:
@@ -191,6 +188,20 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     return report
 
 
+def _run_groups(pending: list[Member], batch_size: int | None, client, scheduler: str | None, n_workers: int | None,
+                threads: int, st: Store, report: SweepReport, bar: "_SweepProgress", backend: str) -> None:
+    """Submit the pending members (in batches) to ``client`` or a new cluster and store each result."""
+    if not pending:
+        return
+    groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
+    if client is not None:
+        _execute(client, st, groups, report, bar, backend)
+    else:
+        with dask_client(scheduler, n_workers, threads) as c:
+            _check_interrupt()
+            _execute(c, st, groups, report, bar, backend)
+
+
 def _execute(client, st: Store, groups: list[list[Member]], report: SweepReport, bar: "_SweepProgress",
              backend: str) -> None:
     from distributed import as_completed
@@ -201,24 +212,75 @@ def _execute(client, st: Store, groups: list[list[Member]], report: SweepReport,
                             priority=max(expected_cost(m) for m in g), pure=False)
         futures[fut] = g
     try:
-        for fut in as_completed(list(futures)):
-            g = futures.pop(fut)
-            try:
-                results = fut.result()
-            except Exception as exc:  # the task raised, or its workers kept dying (KilledWorker)
-                results = [error_dataset(m, exc) for m in g]
-            for m, ds in zip(g, results):
-                st.write_member(m, ds)
-                a = ds.attrs
-                report.ran.append(Outcome(m, str(a.get("status", ERROR)), str(a.get("message", "")),
-                                          float(a.get("mu_star", float("nan"))),
-                                          float(a.get("mu_star_sem", float("nan"))),
-                                          float(a.get("wall_time_s", float("nan")))))
-                bar.advance(report)
-            fut.release()
+        done = as_completed(list(futures))
+        while not done.is_empty():
+            ready = done.next_batch(block=False)
+            if not ready:
+                _check_interrupt()
+                time.sleep(POLL_S)
+            for fut in ready:
+                _check_interrupt()
+                _store_task(fut, futures.pop(fut), st, report, bar)
+        _check_interrupt()
     finally:
         if futures:  # interrupted: drop the tasks still queued or running
             client.cancel(list(futures))
+
+
+POLL_S = 0.05  # the driver looks for finished tasks, and for a Ctrl-C, this often
+
+
+_INTERRUPTED = threading.Event()
+
+
+def _check_interrupt() -> None:
+    """Raise KeyboardInterrupt if Ctrl-C arrived, even if the KeyboardInterrupt that the signal
+    raised was swallowed (see :func:`_interrupt_flag`)."""
+    if _INTERRUPTED.is_set():
+        raise KeyboardInterrupt
+
+
+@contextmanager
+def _interrupt_flag() -> Iterator[None]:
+    """While the sweep runs, SIGINT also sets a flag that the driver checks between tasks.
+
+    Python runs a signal handler in the main thread at the next bytecode, wherever that is; when it
+    is inside a finalizer (a Dask future's ``__del__``, say) the KeyboardInterrupt it raises is
+    printed as "Exception ignored" and lost, and the sweep went on to the end (seen once in CI
+    under load). The flag cannot be lost: the driver polls it every POLL_S and after every task.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _INTERRUPTED.clear()
+    previous = signal.getsignal(signal.SIGINT)
+
+    def handler(signum, frame):
+        _INTERRUPTED.set()
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _INTERRUPTED.clear()
+
+
+def _store_task(fut, group: list[Member], st: Store, report: SweepReport, bar: "_SweepProgress") -> None:
+    """Write the members of one finished task (or its error) to the store and the report."""
+    try:
+        results = fut.result()
+    except Exception as exc:  # the task raised, or its workers kept dying (KilledWorker)
+        results = [error_dataset(m, exc) for m in group]
+    for m, ds in zip(group, results):
+        st.write_member(m, ds)
+        a = ds.attrs
+        report.ran.append(Outcome(m, str(a.get("status", ERROR)), str(a.get("message", "")),
+                                  float(a.get("mu_star", float("nan"))), float(a.get("mu_star_sem", float("nan"))),
+                                  float(a.get("wall_time_s", float("nan")))))
+        bar.advance(report)
+    fut.release()
 
 
 class _SweepProgress:
