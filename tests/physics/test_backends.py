@@ -45,19 +45,22 @@ def test_cuda_kernel_agrees_with_the_cpu_kernel_step_by_step():
 
 
 @pytest.mark.cuda
-def test_cuda_chunks_reuse_device_buffers_and_see_host_changes():
-    # The CUDA backend keeps a batch's device arrays from chunk to chunk (no allocation between
-    # chunks), yet the host batch stays the truth: two chunks equal one of twice the length, and a
-    # row the driver marks finished between chunks is skipped.
+@pytest.mark.parametrize("keep", [False, True])
+def test_cuda_chunks_see_host_changes_with_fresh_or_kept_device_buffers(keep):
+    # Device arrays fresh every chunk (the default, measured on an H100) or kept from chunk to chunk
+    # (keep_buffers=True, not yet measured on a GPU): either way the host batch stays the truth: two
+    # chunks equal one of twice the length, and a row the driver marks finished is skipped.
+    from slipchain.engine.backends.cuda import CUDABackend
+
     systems = [build_system(c) for c in CONFIGS[:3]]
     states = [initial_state(s) for s in systems]
-    gpu = get_backend("gpu")
+    gpu = CUDABackend(keep_buffers=keep)
     one, two = Batch.pack(systems, states), Batch.pack(systems, states)
     o1 = gpu.advance(one, 8, 10)
     a = gpu.advance(two, 4, 10)
     buffers = two.__dict__.get("_cuda_buffers")
     b = gpu.advance(two, 4, 10)
-    assert buffers is not None and two.__dict__.get("_cuda_buffers") is buffers
+    assert (buffers is not None and two.__dict__.get("_cuda_buffers") is buffers) if keep else buffers is None
     for name in ("x", "u", "X", "U", "ysolve", "step"):
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
     np.testing.assert_array_equal(o1.out, np.concatenate([a.out, b.out], axis=1))

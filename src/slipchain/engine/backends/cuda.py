@@ -18,9 +18,10 @@ chains keep them in global memory (same device function, other array arguments).
 Per-sample outputs (mean f_d, mean x, mean X) are reduced across the block in shared memory
 once per sample; work and per-contact sums stay in registers/global memory. No per-step launch
 or host round trip: the host copies the batch in and out once per call of :meth:`CUDABackend.advance`
-(a chunk of 0.5 ms of simulated time in :func:`slipchain.engine.simulate.simulate`), into device
-arrays and a CUDA stream allocated on a batch's first chunk and kept with the batch (no device
-allocation or free between chunks, which could synchronise concurrent batches).
+(a chunk of 0.5 ms of simulated time in :func:`slipchain.engine.simulate.simulate`). With
+``keep_buffers=True`` the device arrays and the CUDA stream are allocated on a batch's first chunk
+and kept with the batch (no device allocation or free between chunks, which could synchronise
+concurrent batches); off by default until measured on a GPU (`bench_gpu.py --concurrent`).
 
 Why numba.cuda and not CuPy raw kernels: the scheme is numba-compiled Python already; numba.cuda
 compiles the same functions for the device (no second implementation in CUDA C), and its
@@ -232,12 +233,14 @@ class CUDABackend:
 
     name = "gpu"
 
-    def __init__(self, threads: int | None = None, shared: bool = True, keep_buffers: bool = True):
+    def __init__(self, threads: int | None = None, shared: bool = True, keep_buffers: bool = False):
         if not cuda_available():
             raise RuntimeError("backend 'gpu' needs a CUDA GPU (numba.cuda found none); use backend 'cpu' or 'auto'")
         self.threads = threads
         self.shared = shared  # state in shared memory where it fits (N <= 736 at 256 threads)
-        self.keep_buffers = keep_buffers  # False: fresh device arrays every chunk (as before; for benchmarks)
+        # True: a batch's device arrays and stream are kept from chunk to chunk (written to let
+        # concurrent batches overlap; not yet measured on a GPU, so off: `bench_gpu.py --concurrent`)
+        self.keep_buffers = keep_buffers
 
     @staticmethod
     def default_threads(rows: int) -> int:
