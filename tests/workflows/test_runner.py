@@ -215,3 +215,48 @@ def test_ctrl_c_swallowed_in_a_finalizer_still_stops_the_sweep(tmp_path, client,
     assert rep.interrupted and not rep.ok
     assert 1 <= len(rep.ran) < 6 and len(Store.open(tmp_path / "s").completed_ids()) == len(rep.ran)
     assert Store.open(tmp_path / "s").invocations()[-1]["interrupted"] is True
+
+
+def test_a_second_driver_on_the_same_store_is_refused_naming_the_holder(tmp_path):
+    # Before the driver lock, both drivers ran every member (and invocations.jsonl claimed both).
+    definition = tmp_path / "sweep.toml"
+    definition.write_text(
+        'name = "two"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
+        f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(6)))}]\n")
+    store = tmp_path / "s"
+    cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store), "--workers", "2",
+           "--no-progress"]
+    first = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        t_end = time.time() + 120
+        while not (store / "driver.json").exists() and time.time() < t_end:
+            assert first.poll() is None, first.communicate()
+            time.sleep(0.05)
+        second = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert second.returncode == 2, second.stdout + second.stderr
+        words = " ".join(second.stderr.split())
+        assert f"store '{store}' is being run by another slipchain driver" in words
+        assert f"pid {first.pid}" in words and "host " in words
+        out, _ = first.communicate(timeout=180)
+        assert first.returncode == 0, out
+    finally:
+        try:
+            os.killpg(first.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    log = Store.open(store).invocations()
+    assert len(log) == 1 and log[0]["ran"] == 6  # only the first driver ran, and it ran each member once
+    assert not (store / "driver.json").exists()  # released on a clean exit
+
+
+def test_the_lock_of_a_killed_driver_is_taken_over_with_a_note(tmp_path, client):
+    sw = _sweep(seed=[0, 1])
+    Store.open(tmp_path / "s", sw)
+    script = ("import os, signal, sys\nfrom slipchain.sweeps.store import Store\n"
+              "with Store.open(sys.argv[1]).driver_lock():\n    os.kill(os.getpid(), signal.SIGKILL)\n")
+    killed = subprocess.Popen([sys.executable, "-c", script, str(tmp_path / "s")])
+    assert killed.wait(timeout=60) == -signal.SIGKILL and (tmp_path / "s" / "driver.json").exists()
+    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
+    assert rep.ok and len(rep.ran) == 2
+    assert len(rep.notes) == 1 and "took over the driver lock" in rep.notes[0] and f"pid {killed.pid}," in rep.notes[0]
+    assert not (tmp_path / "s" / "driver.json").exists()

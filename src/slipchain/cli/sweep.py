@@ -41,6 +41,8 @@ def sweep(
 def print_sweep_report(report: SweepReport, console: Console | None = None) -> None:
     """The end-of-sweep table: what ran, what was skipped, what failed and why."""
     console = console or out
+    for note in report.notes:
+        console.print(f"note: {note}", markup=False, highlight=False, soft_wrap=True)
     table = Table(title=f"slipchain sweep: {report.store}")
     table.add_column("members")
     table.add_column("count", justify="right")

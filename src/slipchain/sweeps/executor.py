@@ -107,6 +107,7 @@ class SweepReport:
     skipped: list[Member] = field(default_factory=list)
     ran: list[Outcome] = field(default_factory=list)
     interrupted: bool = False
+    notes: list[str] = field(default_factory=list)  # e.g. a stale driver lock taken over
     wall_time_s: float = 0.0
 
     @property
@@ -164,11 +165,17 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
         n_workers = n_workers or 1
         threads = GPU_THREADS
     st = store if isinstance(store, Store) else Store.open(store, sweep)
+    with st.driver_lock() as note:  # SweepError, naming the holder, if another driver runs this store
+        return _run_locked(st, note, batch_size, client, scheduler, n_workers, threads, progress, backend)
+
+
+def _run_locked(st: Store, note: str | None, batch_size: int | None, client, scheduler: str | None,
+                n_workers: int | None, threads: int, progress: bool | None, backend: str) -> SweepReport:
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     done = st.completed_ids()
     report = SweepReport(store=st.path, total=len(st.sweep.members),
-                         skipped=[m for m in st.sweep.members if m.id in done])
+                         skipped=[m for m in st.sweep.members if m.id in done], notes=[note] if note else [])
     pending = sorted(st.pending(), key=expected_cost, reverse=True)
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
@@ -184,7 +191,7 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
                            "failed": len(report.failed), "skipped": len(report.skipped), "total": report.total,
                            "interrupted": report.interrupted, "scheduler": scheduler or ("client" if client else "local"),
                            "n_workers": n_workers or (None if scheduler or client else default_workers()),
-                           "backend": str(backend), "slipchain_version": __version__})
+                           "backend": str(backend), "notes": report.notes, "slipchain_version": __version__})
     return report
 
 

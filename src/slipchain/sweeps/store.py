@@ -10,6 +10,8 @@ Layout of a store directory::
     index.csv           one row per member (point, status, mu_star, ...): a readable summary,
                         rebuilt from the files above, never the source of truth
     invocations.jsonl   one line per sweep invocation (start, wall time, counts): a log
+    .driver.lock        the driver lock (an OS file lock through ``filelock``), and
+    driver.json         who holds it (host, pid, start): one driver per store at a time
 
 Why per-member files (and not one Zarr array): every member is written exactly once, by one
 process, with :func:`slipchain.results.io.write_dataset` (temporary file + ``os.replace``), so a crash
@@ -25,12 +27,16 @@ import csv
 import io
 import json
 import os
+import socket
+import time
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import h5netcdf
 import numpy as np
 import xarray as xr
+from filelock import FileLock, Timeout
 
 from ..results.io import read_dataset, write_dataset, write_text_atomic
 from ..results.schema import SWEEP_VARIABLES, Status
@@ -41,6 +47,8 @@ MEMBERS = "members"
 FAILED = "failed"
 INDEX = "index.csv"
 LOG = "invocations.jsonl"
+LOCK = ".driver.lock"
+HOLDER = "driver.json"
 
 # Per-member numbers gathered into the sweep Dataset (from the run schema): variable -> (attr, meaning).
 SUMMARY_VARS = SWEEP_VARIABLES
@@ -83,6 +91,40 @@ class Store:
         (path / FAILED).mkdir(exist_ok=True)
         write_text_atomic(definition, f"# slipchain sweep store; digest {sweep.digest}\n" + sweep.to_toml())
         return cls(path, sweep)
+
+    # --- one driver at a time -----------------------------------------------------------------
+    @contextmanager
+    def driver_lock(self) -> Iterator[str | None]:
+        """Hold the store's driver lock while a sweep runs; yields a note if it was taken over.
+
+        The lock is an OS file lock (``filelock``): the operating system releases it when its
+        process ends, however it ends, so a SIGKILLed driver never blocks the store. Its record in
+        driver.json (host, pid, start) is removed on a clean exit; finding one on acquiring means
+        the last driver was killed, and the yielded note says so. While another driver holds the
+        lock, SweepError names the store and the holder (two drivers would compute every member
+        twice). Note: file locks on network file systems depend on their lock support.
+        """
+        lock = FileLock(self.path / LOCK)
+        record = self.path / HOLDER
+        try:
+            lock.acquire(timeout=0)
+        except Timeout:
+            raise SweepError(f"store {str(self.path)!r} is being run by another slipchain driver "
+                             f"({_holder_text(record)}); two drivers would compute every member twice. Wait for it "
+                             "to finish or stop it (Ctrl-C), then run this command again.") from None
+        try:
+            note = None
+            if record.exists():
+                note = (f"took over the driver lock of store {str(self.path)!r}: its last driver "
+                        f"({_holder_text(record)}) ended without releasing it (killed); its finished members are kept")
+            write_text_atomic(record, json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
+                                                  "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}) + "\n")
+            try:
+                yield note
+            finally:
+                record.unlink(missing_ok=True)
+        finally:
+            lock.release()
 
     # --- members -------------------------------------------------------------------------
     def member_path(self, mid: str) -> Path:
@@ -223,6 +265,14 @@ class Store:
 def open_sweep(path: str | os.PathLike) -> xr.Dataset:
     """The sweep Dataset of the store at ``path`` (see :meth:`Store.dataset`)."""
     return Store.open(path).dataset()
+
+
+def _holder_text(record: Path) -> str:
+    try:
+        h = json.loads(record.read_text())
+        return f"host {h['host']}, pid {h['pid']}, started {h['started']}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return "holder not recorded yet"
 
 
 def _ids_in(folder: Path) -> set[str]:
