@@ -224,3 +224,14 @@ def test_cli_synth_analyze_and_model_overlay(tmp_path):
                           "--store", str(tmp_path / "store")], capture_output=True, text=True, timeout=120)
     assert fig.returncode == 0, fig.stderr
     assert (tmp_path / "ana" / "model_vs_experiment_synthetic-asphalt.png").exists()
+
+
+def test_bytes_that_are_not_utf8_give_one_line_and_exit_2_writing_nothing(tmp_path):
+    # Before: a UnicodeDecodeError traceback, exit 1.
+    bad = tmp_path / "runs.csv"
+    bad.write_bytes(b"run_id,surface\nR1,\xff\xfeasphalt\n")
+    proc = subprocess.run([sys.executable, "-m", "slipchain", "tester", "analyze", str(bad), "--out",
+                           str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip() == f"error: {bad}: not UTF-8 text: byte 0xff at byte offset 18 (line 2)"
+    assert not (tmp_path / "out").exists()

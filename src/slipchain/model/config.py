@@ -287,6 +287,11 @@ def read_toml(path: str | Path) -> dict[str, Any]:
         raise ConfigError(f"config file {str(path)!r} does not exist") from None
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(f"config file {str(path)!r} is not valid TOML: {err}") from None
+    except UnicodeDecodeError as err:
+        raise ConfigError(f"config file {str(path)!r} is not UTF-8 text: byte 0x{err.object[err.start]:02x} at byte "
+                          f"offset {err.start}") from None
+    except (IsADirectoryError, PermissionError) as err:
+        raise ConfigError(f"config file {str(path)!r} cannot be read: {err.strerror}") from None
 
 
 def config_from_toml(text: str) -> Config:

@@ -61,6 +61,17 @@ class Run:
     distance_m: np.ndarray | None = None
 
 
+def _first_bad_byte(path: Path) -> str:
+    """Where a file stops being UTF-8 (pandas decodes in buffers, so its own offsets are not the file's)."""
+    data = path.read_bytes()
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        return f"byte 0x{data[e.start]:02x} at byte offset {e.start} (line {line})"
+    return "a byte sequence that is not valid UTF-8"
+
+
 def _read_csv(path: str | os.PathLike, required: tuple[str, ...]) -> pd.DataFrame:
     path = Path(path)
     if not path.exists():
@@ -71,6 +82,10 @@ def _read_csv(path: str | os.PathLike, required: tuple[str, ...]) -> pd.DataFram
         raise TesterDataError(f"{path}: file is empty; expected a header line with columns {', '.join(required)}") from None
     except pd.errors.ParserError as e:
         raise TesterDataError(f"{path}: not a valid CSV file: {e}") from None
+    except UnicodeDecodeError:
+        raise TesterDataError(f"{path}: not UTF-8 text: {_first_bad_byte(path)}") from None
+    except (IsADirectoryError, PermissionError) as e:
+        raise TesterDataError(f"{path}: cannot be read: {e.strerror}") from None
     df.columns = [c.strip() for c in df.columns]
     missing = [c for c in required if c not in df.columns]
     if missing:
