@@ -95,18 +95,25 @@ def test_worker_killed_mid_task_is_retried(tmp_path, client):
     client.wait_for_workers(2, timeout=60)  # the nanny restarted the killed worker
 
 
-def _interrupt_sweep(tmp_path, sig, after_members):
-    """Start `slipchain sweep` of 8 one-second members on a 2-process local cluster, send ``sig`` to
-    the driver once ``after_members`` are stored, then kill what is left of its process group.
-    Returns (command, store, return code, stdout)."""
+def _slow_sweep(tmp_path, members):
+    """The command of a `slipchain sweep` of ``members`` one-second members on a 2-process local
+    cluster, its store, and the driver started in a new session (so its cluster can be killed)."""
     definition = tmp_path / "sweep.toml"
     definition.write_text(
-        'name = "interrupt"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
-        f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(8)))}]\n")
+        'name = "slow"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
+        f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(members)))}]\n")
     store = tmp_path / "s"
     cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store), "--workers", "2",
            "--no-progress"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    return cmd, store, subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                        start_new_session=True)
+
+
+def _interrupt_sweep(tmp_path, sig, after_members):
+    """Start `slipchain sweep` of 8 one-second members, send ``sig`` to the driver once
+    ``after_members`` are stored, then kill what is left of its process group.
+    Returns (command, store, return code, stdout)."""
+    cmd, store, proc = _slow_sweep(tmp_path, 8)
     members = store / "members"
     try:
         t_end = time.time() + 120
@@ -219,14 +226,7 @@ def test_ctrl_c_swallowed_in_a_finalizer_still_stops_the_sweep(tmp_path, client,
 
 def test_a_second_driver_on_the_same_store_is_refused_naming_the_holder(tmp_path):
     # Before the driver lock, both drivers ran every member (and invocations.jsonl claimed both).
-    definition = tmp_path / "sweep.toml"
-    definition.write_text(
-        'name = "two"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
-        f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(6)))}]\n")
-    store = tmp_path / "s"
-    cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store), "--workers", "2",
-           "--no-progress"]
-    first = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    cmd, store, first = _slow_sweep(tmp_path, 6)
     try:
         t_end = time.time() + 120
         while not (store / "driver.json").exists() and time.time() < t_end:
