@@ -9,11 +9,18 @@ import typer
 
 from ..model.config import ConfigError
 from ..sweeps.definition import SweepError
-from ..workflows import figures
-from ..workflows.mechanism import mechanism_figures
 from .common import fail, out, wrote
 
+# The figure jobs (analysis, matplotlib, scipy) are imported when a figure command runs, not at
+# start-up of every command: `slipchain run` imports only what it needs.
+
 figure_app = typer.Typer(no_args_is_help=True, help="Draw the paper's figures from datasets (PNG and PDF).")
+
+def _figures():
+    from ..workflows import figures
+
+    return figures
+
 
 OutOpt = Annotated[Path, typer.Option("--out", help="Output directory.")]
 
@@ -26,7 +33,7 @@ def fig5(
 ) -> None:
     """Fig. 5: eq. (1) for eta_c = 0, omega0, 0.3 omega0, 0.1 omega0 and the contact average (N = 1001, theta = 1)."""
     try:
-        wrote(figures.fig5(out_dir, config, seed))
+        wrote(_figures().fig5(out_dir, config, seed))
     except ConfigError as e:
         fail(str(e))
 
@@ -38,7 +45,7 @@ def fig6(
 ) -> None:
     """Fig. 6: mu_star versus theta, three eta_c, two v_d, N = 1001 stars, the dashed line."""
     try:
-        wrote(figures.fig6(store, out_dir))
+        wrote(_figures().fig6(store, out_dir))
     except SweepError as e:
         fail(str(e))
 
@@ -51,7 +58,7 @@ def tester(
 ) -> None:
     """Measured mu(v) with the model's mu_star(v_d) curves, one fitted scale factor per surface."""
     try:
-        wrote(figures.tester(runs, store, out_dir))
+        wrote(_figures().tester(runs, store, out_dir))
     except (SweepError, FileNotFoundError) as e:
         fail(str(e))
 
@@ -63,6 +70,8 @@ def mechanism(
 ) -> None:
     """Stick-slip fraction versus theta, per-contact forces, event sizes and spectra; mechanism.md with the numbers."""
     try:
+        from ..workflows.mechanism import mechanism_figures
+
         wrote(mechanism_figures(store, out_dir))
     except (SweepError, FileNotFoundError) as e:
         fail(str(e))
@@ -75,7 +84,7 @@ def velocity(
 ) -> None:
     """mu_star versus v_d on a log axis, one curve per theta (the model's Figs. 2 and 3)."""
     try:
-        wrote(figures.velocity(store, out_dir))
+        wrote(_figures().velocity(store, out_dir))
     except SweepError as e:
         fail(str(e))
 
@@ -87,7 +96,7 @@ def epsilon(
 ) -> None:
     """mu_star versus theta for each epsilon, and the drop from the smallest theta to the largest."""
     try:
-        paths, lines = figures.epsilon(store, out_dir)
+        paths, lines = _figures().epsilon(store, out_dir)
     except SweepError as e:
         fail(str(e))
     wrote(paths)
@@ -102,6 +111,6 @@ def dead_weight(
 ) -> None:
     """Applied mu_star against the measured steady velocity per theta (runaways at the right edge)."""
     try:
-        wrote(figures.dead_weight(store, out_dir))
+        wrote(_figures().dead_weight(store, out_dir))
     except SweepError as e:
         fail(str(e))

@@ -14,8 +14,6 @@ from ..engine.backends import BackendName
 from ..results.schema import Status
 from ..sweeps.definition import Preset, SweepError, load_sweep_definition
 from ..sweeps.executor import SweepReport, run_sweep
-from ..workflows.mechanism import analyse_store
-from ..workflows.reproduce import reproduce as reproduce_job
 from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, sweep_exit
 
 
@@ -73,6 +71,8 @@ def reproduce(
     backend: BackendOpt = BackendName.CPU,
 ) -> None:
     """The main job: the Fig. 6 sweep (resumable), Figs. 5 and 6, and report.md with the paper's claims."""
+    from ..workflows.reproduce import reproduce as reproduce_job  # (figures and report: imported when used)
+
     command = " ".join(["slipchain", "reproduce", *sys.argv[2:]]) if len(sys.argv) > 1 else ""
     try:
         result = reproduce_job(preset, store, out_dir, scheduler=scheduler, n_workers=workers, progress=progress,
@@ -95,6 +95,8 @@ def mechanism(
     backend: BackendOpt = BackendName.CPU,
 ) -> None:
     """Field recordings, slip events and spectra of the lowest and highest theta at each v_d (into STORE/mechanism/)."""
+    from ..workflows.mechanism import analyse_store  # (scipy's signal processing: imported when used)
+
     try:
         analyse_store(store, duration=duration, interval=interval, force=force, backend=backend,
                       on_member=lambda a: out.print(f"{'kept' if a.kept else 'wrote'} {a.path} ({a.member.label()})"))

@@ -10,8 +10,6 @@ import typer
 from rich.table import Table
 
 from ..tester.inputs import TesterDataError
-from ..tester.synth import NOTICE, SynthSetup, write_synthetic
-from ..workflows.tester import analyze as analyze_job
 from .common import err, fail, out
 
 tester_app = typer.Typer(no_args_is_help=True, help="The paper's friction-tester experiment: analysis and synthetic data.")
@@ -24,6 +22,8 @@ def analyze(
     traces: Annotated[Optional[Path], typer.Option("--traces", help="Raw distance traces (CSV, long format).")] = None,
 ) -> None:
     """Steady velocity per trace, mu and p0 with uncertainties, maxima per pressure, the load test."""
+    from ..workflows.tester import analyze as analyze_job  # (scipy.stats, matplotlib: imported when used)
+
     try:
         result = analyze_job(runs_csv, traces, out_dir)
     except TesterDataError as e:
@@ -49,6 +49,8 @@ def synth(
     load_effect: Annotated[float, typer.Option("--load-effect", help="Planted s: fractional fall of mu near its maximum per p_ref of pressure (0: none).")] = 0.15,
 ) -> None:
     """SYNTHETIC demo data: a simulated dead-weight tester (runs.csv, traces.csv, truth.csv, README.txt)."""
+    from ..tester.synth import NOTICE, SynthSetup, write_synthetic
+
     setup = SynthSetup(seed=seed)
     paths = write_synthetic(out_dir, replace(setup, law=replace(setup.law, s=load_effect)))
     err.print(NOTICE, markup=False, highlight=False, soft_wrap=True)
