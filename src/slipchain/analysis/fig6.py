@@ -22,7 +22,7 @@ import xarray as xr
 from ..model.config import Config, make_config
 from ..model.system import build_system
 from ..results.schema import Status
-from .statistics import base_config, drive_velocities, main_n, main_selection, ratio, seed_average
+from .statistics import base_config, drive_velocities, load_drops, main_average, main_n, main_selection
 
 V_D2_TOLERANCE = 0.03  # issue acceptance: every mu_star within 3 % of the dashed line at v_d2
 DROP_RATIO_MAX = 0.8  # issue acceptance: mu_star(theta=1) <= 0.8 mu_star(theta_min) at v_d1, eta_c = 0.1 omega0
@@ -60,9 +60,7 @@ def dashed_line(cfg: Config, v_d2: float, eta_c: float | None = None) -> float:
 
 def fig6_table(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, Any]]:
     """Seed-averaged mu_star on (N, theta, eta_c, v_d) at the main values of any other dimension."""
-    sel = main_selection(ds)
-    sub = ds.sel(sel) if sel else ds
-    return seed_average(sub), sel
+    return main_average(ds)
 
 
 def fig6_figure_data(ds: xr.Dataset) -> xr.Dataset:
@@ -100,7 +98,7 @@ def evaluate(ds: xr.Dataset) -> list[Claim]:
 
     # 1. v_d2: load independent, near the dashed line.
     if v_d2 != v_d1:
-        devs, rows, ratios = [], [], []
+        devs, rows = [], []
         for ec in eta_values:
             line = dashed_line(cfg, v_d2, ec)
             cur = main.sel(v_d=v_d2, eta_c=ec).dropna("theta", subset=["mu"])
@@ -108,9 +106,7 @@ def evaluate(ds: xr.Dataset) -> list[Claim]:
                 mu = float(cur["mu"].sel(theta=th))
                 devs.append(mu / line - 1.0)
                 rows.append((ec, float(th), mu, float(cur["err"].sel(theta=th))))
-            if cur.sizes["theta"] >= 2:
-                first, last = cur.isel(theta=0), cur.isel(theta=-1)
-                ratios.append((ec, *ratio(float(last["mu"]), float(last["err"]), float(first["mu"]), float(first["err"]))))
+        ratios = [(d["eta_c"], d["ratio"], d["ratio_err"]) for d in load_drops(main.sel(v_d=v_d2).sortby("eta_c"), "eta_c")]
         line = dashed_line(cfg, v_d2)
         worst = max(devs, key=abs) if devs else float("nan")
         mean_dev = float(np.mean(devs)) if devs else float("nan")
@@ -127,16 +123,7 @@ def evaluate(ds: xr.Dataset) -> list[Claim]:
         ))
 
     # 2. v_d1: mu_star falls with theta, more for smaller eta_c.
-    drops = []
-    for ec in eta_values:
-        cur = main.sel(v_d=v_d1, eta_c=ec).dropna("theta", subset=["mu"])
-        if cur.sizes["theta"] < 2:
-            continue
-        first, last = cur.isel(theta=0), cur.isel(theta=-1)
-        r, e = ratio(float(last["mu"]), float(last["err"]), float(first["mu"]), float(first["err"]))
-        drops.append({"eta_c": ec, "theta_min": float(first["theta"]), "theta_max": float(last["theta"]),
-                      "mu_min_theta": float(first["mu"]), "err_min_theta": float(first["err"]),
-                      "mu_max_theta": float(last["mu"]), "err_max_theta": float(last["err"]), "ratio": r, "ratio_err": e})
+    drops = load_drops(main.sel(v_d=v_d1).sortby("eta_c"), "eta_c")  # per eta_c, ascending: smallest and largest theta, their ratio
     if drops:
         smallest = min(drops, key=lambda d: d["eta_c"])
         by_eta = sorted(drops, key=lambda d: d["eta_c"])

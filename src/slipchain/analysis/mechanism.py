@@ -31,7 +31,6 @@ shorter), 50 % overlap, mean removed per segment. The block-velocity PSD is the 
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -47,7 +46,7 @@ from ..model.system import State, System
 from ..results.io import read_dataset
 from ..results.observables import SLOW_FRACTION
 from ..results.schema import Status
-from .statistics import base_config, main_n, main_selection, seed_average
+from .statistics import base_config, main_average, main_n, main_selection
 
 STICK_FRACTION = 0.05
 SLIP_THRESHOLD = 2.0
@@ -119,8 +118,7 @@ def stick_slip_average(stick_slip: xr.Dataset) -> xr.Dataset:
     """Seed means of the stick-slip fraction (:func:`stick_slip_dataset`) at the main values of the
     dimensions outside Fig. 6 and the main N; attrs: omega0 and the base eta_c (for the symbols)."""
     cfg = base_config(stick_slip)
-    sel = main_selection(stick_slip)
-    avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
+    avg, _ = main_average(stick_slip)
     if "N" in avg.dims:
         avg = avg.sel(N=main_n(avg))
     return avg.assign_attrs(omega0=cfg.omega0, eta_c=cfg.eta_c)
@@ -131,8 +129,7 @@ def velocity_figure_data(ds: xr.Dataset, points: int = 200) -> xr.Dataset:
     remain besides v_d and theta), with the single-contact law f(v, v0)/(epsilon f0) on a ``v`` grid
     spanning the swept v_d; attrs: the smallest v* = v0 10**-delta and the values held."""
     cfg = base_config(ds)
-    sel = main_selection(ds)
-    avg = seed_average(ds.sel(sel) if sel else ds)
+    avg, _ = main_average(ds)
     other = [d for d in avg["mu"].dims if d not in ("v_d", "theta")]
     sub = avg.isel({d: 0 for d in other}) if other else avg
     v = np.geomspace(float(avg["v_d"].min()), float(avg["v_d"].max()), points)

@@ -14,8 +14,8 @@ import xarray as xr
 from ..results.observables import SLOW_FRACTION
 from ..results.schema import Status
 from .fig6 import Claim, eta_label, fig6_table
-from .mechanism import STICK_FRACTION, median_frequency
-from .statistics import base_config, load_drops, main_n, main_selection, seed_average
+from .mechanism import STICK_FRACTION, median_frequency, stick_slip_average
+from .statistics import base_config, load_drops
 
 
 def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, Any]], *, command: str,
@@ -115,10 +115,7 @@ def _table(ds: xr.Dataset) -> list[str]:
 
 def mechanism_summary(stick_slip: xr.Dataset, analyses: list[xr.Dataset]) -> str:
     """Markdown: what the mechanism figures show, in numbers."""
-    sel = main_selection(stick_slip)
-    avg = seed_average(stick_slip.sel(sel) if sel else stick_slip)
-    if "N" in avg.dims:
-        avg = avg.sel(N=main_n(avg))
+    avg = stick_slip_average(stick_slip)
     lines = ["# The mechanism: stick-slip, slip events, spectra", "",
              f"A contact stick-slips when it spends at least {STICK_FRACTION:.0%} of the steady time at |u| < "
              f"{SLOW_FRACTION:g} v_d. Seed means ± error (seeds and binomial).", "",

@@ -73,6 +73,13 @@ def seed_average(ds: xr.Dataset) -> xr.Dataset:
     return xr.Dataset({"mu": mean.where(n > 0), "err": err.where(n > 0), "n": n})
 
 
+def main_average(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, Any]]:
+    """Seed averages (:func:`seed_average`) with every dimension outside Fig. 6's held at its main
+    value (:func:`main_selection`); returns the averages and the values held."""
+    sel = main_selection(ds)
+    return seed_average(ds.sel(sel) if sel else ds), sel
+
+
 def ratio(a: float, ea: float, b: float, eb: float) -> tuple[float, float]:
     """a/b with its error from the relative errors of a and b in quadrature."""
     r = a / b
@@ -110,5 +117,5 @@ def load_drops(avg: xr.Dataset, dim: str) -> list[dict[str, float]]:
     return rows
 
 
-__all__ = ["FIG6_DIMS", "MAIN_N", "base_config", "drive_velocities", "epsilon_table", "load_drops", "main_n",
+__all__ = ["FIG6_DIMS", "MAIN_N", "base_config", "drive_velocities", "epsilon_table", "load_drops", "main_average", "main_n",
            "main_selection", "ratio", "seed_average"]
