@@ -31,6 +31,7 @@ Importing this module never needs CUDA: the kernel is compiled on first launch.
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 
@@ -63,8 +64,9 @@ def cuda_available() -> bool:
         return False
 
 
+@functools.cache
 def _sm_count() -> int:
-    """Multiprocessors of the current GPU (the simulator has no such notion: unlimited)."""
+    """Multiprocessors of the current GPU (the simulator has no such notion: unlimited); asked once."""
     try:
         with _INIT_LOCK:
             return int(cuda.get_current_device().MULTIPROCESSOR_COUNT)
@@ -237,7 +239,7 @@ class CUDABackend:
         if not cuda_available():
             raise RuntimeError("backend 'gpu' needs a CUDA GPU (numba.cuda found none); use backend 'cpu' or 'auto'")
         self.threads = threads
-        self.shared = shared  # state in shared memory where it fits (N <= 736 at 256 threads)
+        self.shared = shared  # a row's state in shared memory where it fits (N <= 736 at 256 threads)
         # True: a batch's device arrays and stream are kept from chunk to chunk (written to let
         # concurrent batches overlap; not yet measured on a GPU, so off: `bench_gpu.py --concurrent`)
         self.keep_buffers = keep_buffers
@@ -254,11 +256,11 @@ class CUDABackend:
         threads = self.threads or min(self.default_threads(b), max(1, n))
         in_shared = (SHARED_ARRAYS * n + threads) * 8 <= SHARED_BYTES and self.shared
         shared_bytes = ((SHARED_ARRAYS * n if in_shared else 0) + threads) * 8
-        dev = _device_buffers(batch, in_shared)
+        dev = _device_buffers(batch, in_shared) if self.keep_buffers else _DeviceBuffers(batch, in_shared)
         stream, d = dev.stream, dev.arrays
         # The host batch is the truth between calls (the driver changes params and status, observers
-        # read the state), so everything is copied in and out, but into buffers allocated once per
-        # batch: no device allocation or free between chunks (see _DeviceBuffers).
+        # read the state), so everything is copied in and out; with keep_buffers into device arrays
+        # allocated once per batch (see _DeviceBuffers), else into fresh ones.
         for name in _STATE:
             d[name].copy_to_device(np.ascontiguousarray(getattr(batch, name)), stream=stream)
         if dev.zeros["out"].shape[1] != n_samples:  # (the chunk length changes rarely: a row's last chunk, a ramp)
@@ -274,8 +276,6 @@ class CUDABackend:
             d[name].copy_to_host(getattr(batch, name), stream=stream)
         res = [d[k].copy_to_host(stream=stream) for k in ("out", "acc", "cacc")]
         stream.synchronize()
-        if not self.keep_buffers:
-            del batch.__dict__["_cuda_buffers"]
         return ChunkOutput(*res)
 
 
@@ -283,8 +283,8 @@ _STATE = ("x", "u", "X", "U", "step", "params", "sites", "vstar", "n_contacts", 
 
 
 class _DeviceBuffers:
-    """A batch's device arrays and CUDA stream, allocated on its first chunk and reused for every
-    later one. Why: allocating and freeing device memory per chunk (cuda.to_device, numba's
+    """A batch's device arrays and CUDA stream; with ``keep_buffers`` allocated on its first chunk
+    and reused for every later one. Why: allocating and freeing device memory per chunk (cuda.to_device, numba's
     deferred cuMemFree) may synchronise the whole device, so batches advanced from several threads
     (the sweep's GPU worker) would wait for each other's kernels instead of overlapping."""
 
