@@ -11,6 +11,7 @@ import typer
 from rich.table import Table
 
 from ..engine.backends import BackendName
+from ..engine.checkpoint import CHECKPOINT_EVERY, CheckpointError, simulated_time
 from ..engine.simulate import run as run_model
 from ..model.config import ConfigError, load_config
 from ..results.io import write_dataset
@@ -25,19 +26,33 @@ def run(
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object with the headline numbers.")] = False,
     progress: ProgressOpt = None,
     backend: BackendOpt = BackendName.CPU,
+    checkpoint: Annotated[Optional[Path], typer.Option(
+        "--checkpoint", help="Keep the run's full state in this file (written atomically); if it exists, resume "
+        "from it (bit for bit). Removed once the run has finished and its result is written.")] = None,
+    checkpoint_every: Annotated[float, typer.Option(
+        "--checkpoint-every", min=0.0, help="Wall-clock seconds between checkpoints (0: after every chunk).")] = CHECKPOINT_EVERY,
 ) -> None:
     """Run one realisation of the model and report mu_star with its standard error."""
     try:
         cfg = load_config(config, set_)
     except ConfigError as e:
         fail(str(e))
+    if checkpoint is not None and checkpoint.exists():
+        err.print(f"resuming from checkpoint {checkpoint} (t = {simulated_time(checkpoint):.6g} s simulated)",
+                  markup=False, highlight=False, soft_wrap=True)
     try:
-        ds = run_model(cfg, backend=backend, progress=progress)
-    except RuntimeError as e:  # e.g. backend 'gpu' without a GPU
+        ds = run_model(cfg, backend=backend, progress=progress, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+    except (RuntimeError, CheckpointError) as e:  # e.g. backend 'gpu' without a GPU; another run's checkpoint
         fail(str(e))
     if out_path is not None:
         write_dataset(ds, out_path)
     info = summary(ds)
+    if checkpoint is not None:
+        if info["status"] == Status.INTERRUPTED:
+            err.print(f"the checkpoint {checkpoint} is kept: run the same command to resume", markup=False,
+                      highlight=False, soft_wrap=True)
+        else:  # finished, and its result is written (or printed): the state is no longer needed
+            checkpoint.unlink(missing_ok=True)
     if as_json:
         sys.stdout.write(json.dumps(info) + "\n")
     else:

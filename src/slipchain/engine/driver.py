@@ -10,7 +10,9 @@ Loop order (each chunk), as in hoomd's ``Simulation.run``:
 4. the work of the constant dead-weight forces is added (F_b times the upper layer's displacement);
 5. every observer sees the chunk (:mod:`.observers`: recorder, field recorder, progress bar);
 6. each live row's control decides: ``diverged`` if the kernel flagged a non-finite state, else
-   stop at its length limit or once converged; a finished row is marked for the kernel to skip.
+   stop at its length limit or once converged; a finished row is marked for the kernel to skip;
+7. the checkpointer, if any, writes the state when its interval has passed (:mod:`.checkpoint`):
+   here, and only here, the batch, the controls and the recorder agree.
 
 Ctrl-C (KeyboardInterrupt) during the loop stops every active row with status ``interrupted``:
 what was simulated is kept and returned like a finished run.
@@ -28,13 +30,15 @@ from .observers import Observer
 
 
 def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_steps: int, chunk: int,
-          interval: float, observers: list[Observer] = ()) -> None:
+          interval: float, observers: list[Observer] = (), checkpoint=None) -> None:
     """Advance ``batch`` until every row's control says stop (loop order: module docstring).
 
     **Arguments:** ``backend`` advances the batch; ``controls`` one :class:`RowControl` per row
     (updated in place: status, message, samples done); ``sample_steps`` steps per output sample;
     ``chunk`` samples per compiled call at most; ``interval`` the output interval (s, for
-    messages); ``observers`` see every chunk.
+    messages); ``observers`` see every chunk; ``checkpoint`` (a
+    :class:`~.checkpoint.Checkpointer`) is told after every chunk, and writes a final checkpoint
+    when every row has finished (not when interrupted: the last periodic one stays).
     """
     try:
         while any(c.active for c in controls):
@@ -62,6 +66,11 @@ def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_
                 c.after_chunk(n, co.out[i])
                 if not c.active:
                     batch.status[i] = batch.step[i]  # finished: the kernel skips this row from now on
+            if checkpoint is not None:
+                if any(c.active for c in controls):
+                    checkpoint.after_chunk()
+                else:
+                    checkpoint.save()
     except KeyboardInterrupt:
         for c in controls:
             if c.active:

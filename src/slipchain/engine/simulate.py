@@ -12,6 +12,7 @@ never part of the config: the same config gives the same physics on every backen
 
 from __future__ import annotations
 
+import os
 import time
 from typing import Any, Mapping
 
@@ -23,35 +24,48 @@ from ..model.system import State, System, build_system, initial_state
 from ..results.checks import stored_energy
 from ..results.schema import assemble_run
 from .backends import BackendName, Batch, get_backend
+from .checkpoint import CHECKPOINT_EVERY, Checkpointer
 from .control import CHUNK_TIME, row_control
 from .driver import drive
 from .observers import ProgressBar, Recorder
 
 
 def run(config: Config | Mapping[str, Any] | None = None, *, backend: str | BackendName = BackendName.CPU,
-        progress: bool | None = None) -> xr.Dataset:
+        progress: bool | None = None, checkpoint: str | os.PathLike | None = None,
+        checkpoint_every: float = CHECKPOINT_EVERY) -> xr.Dataset:
     """Run the model for ``config`` (a Config, a mapping of overrides, or None for the defaults).
+
+    ``checkpoint``: a file for the run's state, written every ``checkpoint_every`` wall-clock
+    seconds and at the end; if it exists, the run resumes from it and gives bit for bit the result
+    of an uninterrupted run (:mod:`slipchain.engine.checkpoint`; CheckpointError if it belongs to
+    another config). Delete it once the result is saved.
 
     **Returns:** the run Dataset (docs/run-schema.md).
     """
     cfg = config if isinstance(config, Config) else make_config(dict(config or {}))
-    return simulate(build_system(cfg), backend=backend, progress=progress)
+    return simulate(build_system(cfg), backend=backend, progress=progress, checkpoint=checkpoint,
+                    checkpoint_every=checkpoint_every)
 
 
 def simulate(system: System, state: State | None = None, *, backend: str | BackendName = BackendName.CPU,
-             progress: bool | None = None) -> xr.Dataset:
+             progress: bool | None = None, checkpoint: str | os.PathLike | None = None,
+             checkpoint_every: float = CHECKPOINT_EVERY) -> xr.Dataset:
     """Integrate one realisation from ``state`` (default: the config's start) to a run Dataset."""
-    return simulate_batch([system], None if state is None else [state], backend=backend, progress=progress)[0]
+    return simulate_batch([system], None if state is None else [state], backend=backend, progress=progress,
+                          checkpoint=checkpoint, checkpoint_every=checkpoint_every)[0]
 
 
 def simulate_batch(systems: list[System], states: list[State] | None = None, *,
-                   backend: str | BackendName = BackendName.CPU, progress: bool | None = None) -> list[xr.Dataset]:
+                   backend: str | BackendName = BackendName.CPU, progress: bool | None = None,
+                   checkpoint: str | os.PathLike | None = None,
+                   checkpoint_every: float = CHECKPOINT_EVERY) -> list[xr.Dataset]:
     """Integrate several realisations together (one backend call advances all of them).
 
     They must share N, dt and the output interval (one kernel launch runs them in lock-step);
     each row has its own length control (fixed, automatic, dead-weight ramp) and stops on its
     own: a finished row is skipped by the kernel. On the GPU this is how a sweep fills the device.
-    The wall time recorded for every row is the batch's.
+    The wall time recorded for every row is the batch's. ``checkpoint``: see :func:`run` (one file
+    for the whole batch).
     """
     cfg0 = systems[0].config
     for s in systems:
@@ -69,16 +83,29 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     e0 = [stored_energy(s, st) for s, st in zip(systems, states0)]
     controls = [row_control(s, x0[i], interval) for i, s in enumerate(systems)]
     recorder = Recorder([s.n_contacts for s in systems])
+    saver, wall_before, resumed_at = None, 0.0, []
+    if checkpoint is not None:
+        saver = Checkpointer(checkpoint, checkpoint_every)
+        if saver.path.exists():
+            got = saver.restore(systems, batch, controls, recorder)
+            x0, e0, wall_before = got.x0, got.e0, got.wall
+            resumed_at = got.resumed_at + [max(c.n for c in controls) * interval]
     observers = [recorder, ProgressBar(progress if len(systems) == 1 else False, controls[0], interval)]
     wall0 = time.perf_counter()
+    if saver is not None:
+        saver.attach(systems, batch, controls, recorder, x0, e0, wall0, wall_before, resumed_at, engine.name, interval)
     drive(engine, batch, controls, sample_steps=sample_steps, chunk=max(1, int(round(CHUNK_TIME / interval))),
-          interval=interval, observers=observers)
-    wall = time.perf_counter() - wall0
-    return [assemble_run(s, recorder.recording(i), batch.state(i), x0_mean=x0[i], e0=e0[i], interval=interval,
-                         steps_per_sample=sample_steps, status=c.status,
-                         message=c.final_message(s.config.t_max, s.config.sem_target), sem_reached=c.sem_reached,
-                         wall=wall, backend=engine.name)
-            for i, (s, c) in enumerate(zip(systems, controls))]
+          interval=interval, observers=observers, checkpoint=saver)
+    wall = wall_before + time.perf_counter() - wall0
+    out = [assemble_run(s, recorder.recording(i), batch.state(i), x0_mean=x0[i], e0=e0[i], interval=interval,
+                        steps_per_sample=sample_steps, status=c.status,
+                        message=c.final_message(s.config.t_max, s.config.sem_target), sem_reached=c.sem_reached,
+                        wall=wall, backend=engine.name)
+           for i, (s, c) in enumerate(zip(systems, controls))]
+    if resumed_at:
+        for ds in out:
+            ds.attrs["resumed_at"] = ", ".join(f"{t:.6e}" for t in resumed_at)
+    return out
 
 
 __all__ = ["run", "simulate", "simulate_batch"]

@@ -101,6 +101,7 @@ RUN_ATTRIBUTES: tuple[Entry, ...] = (
     Entry("steps", "", "", "time steps", summary=True, sweep="steps"),
     Entry("wall_time_s", "", "s", "wall time of the run", summary=True, sweep="wall_time_s"),
     Entry("backend", "", "", "where the run was computed (cpu or gpu); not part of a member's identity"),
+    Entry("resumed_at", "", "s", "runs resumed from a checkpoint only: the simulated times of the resumes"),
     Entry("mu_star_norm", "", "N", "epsilon f0 theta, the unit of mu_star"),
     Entry("W_drive", "", "J", "work of the drive"),
     Entry("W_damping", "", "J", "work of the inter-block damping (negative)"),

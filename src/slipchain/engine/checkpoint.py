@@ -1,0 +1,224 @@
+"""Checkpoints: the full state of a run in progress, written atomically between compiled chunks.
+
+A checkpoint holds everything the time loop (:func:`slipchain.engine.driver.drive`) carries from
+one chunk to the next, so that a run resumed from it continues **bit for bit** as if it had never
+stopped:
+
+* the batch (:class:`~slipchain.engine.backends.base.Batch`): positions and velocities of both
+  chains, the step counter, the kernel parameters, the contacts, and the contact solver's warm
+  start (``ysolve``: log10 of each contact's velocity and its two Taylor factors; the implicit
+  contact solve starts from it, so it is state, not a cache);
+* each row's control (:class:`~slipchain.engine.control.RowControl`): samples done, limit,
+  active/status/message, the automatic length's f_d and <x> series and its last SE (the
+  dead-weight ramp is a function of the samples done);
+* the recorder (:class:`~slipchain.engine.observers.Recorder`): every sample so far, the chunk
+  boundaries, the per-contact sums per chunk and the work sums;
+* the start values the result needs (<x> and the stored energy at the start), the wall time so far
+  and the simulated times of earlier resumes.
+
+There is no random number generator in the time loop (the disorder is drawn from the seed when
+the system is built), so none is stored. The checkpoint is written only where this state is
+consistent: after the run controls have seen a chunk (never from a Ctrl-C handler). It is a
+NetCDF file written with :func:`slipchain.results.io.write_dataset` (temporary file and
+``os.replace``): a kill while writing leaves the previous checkpoint whole.
+
+A checkpoint names its configs; resuming with another config is refused (:class:`CheckpointError`).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .._version import __version__
+from ..model.system import System
+from ..results.io import read_dataset, write_dataset
+from ..results.schema import Status
+from . import scheme as S
+from .backends.base import Batch
+from .control import RowControl
+from .observers import Recorder
+
+FORMAT = 1  # bumped whenever the layout below changes; a checkpoint of another format is refused
+CHECKPOINT_EVERY = 60.0  # default wall-time seconds between checkpoints (slipchain run --checkpoint-every)
+_BATCH_FIELDS = [f.name for f in fields(Batch)]
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be used: unreadable, another format, or another run's."""
+
+
+@dataclass
+class Restored:
+    """What :meth:`Checkpointer.restore` gives back besides the objects it fills in."""
+
+    x0: list[float]
+    e0: list[float]
+    wall: float
+    resumed_at: list[float] = field(default_factory=list)
+
+
+class Checkpointer:
+    """Write the run's state to ``path`` every ``every`` wall-clock seconds (0: after every chunk).
+
+    Made by :func:`slipchain.engine.simulate.simulate_batch`, which calls :meth:`restore` before
+    the loop (if ``path`` exists) and :meth:`attach` to give it the live objects; the driver calls
+    :meth:`after_chunk` once per chunk, after the run controls. A failed write (a full disk, say)
+    warns and the run goes on: the previous checkpoint is still whole.
+    """
+
+    def __init__(self, path: str | Path, every: float = CHECKPOINT_EVERY):
+        if not every >= 0:
+            raise ValueError(f"checkpoint interval must be >= 0 seconds, got {every!r}")
+        self.path = Path(path)
+        self.every = float(every)
+        self._last = time.monotonic()
+        self._live: tuple | None = None
+        self.writes = 0
+
+    # --- writing ---------------------------------------------------------------------------
+    def attach(self, systems: list[System], batch: Batch, controls: list[RowControl], recorder: Recorder,
+               x0: list[float], e0: list[float], wall0: float, wall_before: float, resumed_at: list[float],
+               backend: str, interval: float) -> None:
+        self._live = (systems, batch, controls, recorder, x0, e0, wall0, wall_before, resumed_at, backend, interval)
+        self._last = time.monotonic()
+
+    def after_chunk(self) -> None:
+        """Called by the driver after every chunk: write if ``every`` seconds have passed."""
+        if time.monotonic() - self._last >= self.every:
+            self.save()
+
+    def save(self) -> None:
+        """Write the state now (atomically)."""
+        if self._live is None:
+            raise RuntimeError("Checkpointer.save before attach")
+        systems, batch, controls, rec, x0, e0, wall0, wall_before, resumed_at, backend, interval = self._live
+        try:
+            write_dataset(_to_dataset(systems, batch, controls, rec, x0, e0,
+                                      wall_before + time.perf_counter() - wall0, resumed_at, backend, interval), self.path)
+            self.writes += 1
+        except OSError as e:
+            warnings.warn(f"could not write checkpoint {str(self.path)!r} ({e}); the run goes on and the previous "
+                          "checkpoint, if any, is kept", RuntimeWarning, stacklevel=2)
+        self._last = time.monotonic()
+
+    # --- reading ---------------------------------------------------------------------------
+    def restore(self, systems: list[System], batch: Batch, controls: list[RowControl], recorder: Recorder) -> Restored:
+        """Fill ``batch``, ``controls`` and ``recorder`` (made fresh for ``systems``) from the file."""
+        try:
+            ds = read_dataset(self.path)
+        except Exception as e:  # h5py's OSError, a ValueError of xarray: the file is not a whole checkpoint
+            raise CheckpointError(f"checkpoint {str(self.path)!r} is unreadable ({type(e).__name__}: {e}); "
+                                  "delete it to start the run over") from None
+        a = ds.attrs
+        if a.get("checkpoint_format") != FORMAT:
+            raise CheckpointError(f"checkpoint {str(self.path)!r} has format {a.get('checkpoint_format')!r} "
+                                  f"(written by slipchain {a.get('slipchain_version', '?')}); this version reads "
+                                  f"format {FORMAT}. Delete it to start the run over")
+        configs = [str(c) for c in np.atleast_1d(ds["config"].values)]
+        mine = [s.config.to_toml() for s in systems]
+        if configs != mine:
+            which = "the number of runs differs" if len(configs) != len(mine) else \
+                f"row {next(i for i, (p, q) in enumerate(zip(configs, mine)) if p != q)}: " + _first_difference(
+                    next(p for p, q in zip(configs, mine) if p != q), next(q for p, q in zip(configs, mine) if p != q))
+            raise CheckpointError(f"checkpoint {str(self.path)!r} belongs to another run ({which}); give another "
+                                  "--checkpoint path, or delete it to start over")
+        for name in _BATCH_FIELDS:
+            value = ds[f"batch_{name}"].values
+            target = getattr(batch, name)
+            if value.shape != target.shape:
+                raise CheckpointError(f"checkpoint {str(self.path)!r}: batch array {name!r} has shape {value.shape}, "
+                                      f"this run needs {target.shape}")
+            target[...] = value
+        for r, c in enumerate(controls):
+            c.limit = int(ds["limit"].values[r])
+            c.n = int(ds["samples_done"].values[r])
+            c.active = bool(ds["active"].values[r])
+            c.status = Status(str(ds["row_status"].values[r]))
+            c.message = str(ds["row_message"].values[r])
+            if c.converge is not None:
+                c.converge.f_d = [ds[f"conv_f_d_{r}"].values.copy()]
+                c.converge.x_mean = [ds[f"conv_x_mean_{r}"].values.copy()]
+                c.converge.reached = bool(ds["conv_reached"].values[r])
+                c.converge.sem = float(ds["conv_sem"].values[r])
+            samples = ds[f"rec_samples_{r}"].values
+            lengths = ds[f"rec_chunk_samples_{r}"].values.astype(int)
+            cuts = np.cumsum(lengths)[:-1]
+            recorder.samples[r] = [s.copy() for s in np.split(samples, cuts)] if lengths.size else []
+            recorder.contact_sums[r] = [s.copy() for s in ds[f"rec_contact_sums_{r}"].values] if lengths.size else []
+            recorder.chunk_starts[r] = [int(v) for v in ds[f"rec_chunk_starts_{r}"].values]
+            recorder.n[r] = int(ds["rec_n"].values[r])
+        recorder.works[...] = ds["rec_works"].values
+        resumed = [float(v) for v in np.atleast_1d(ds["resumed_at"].values)] if "resumed_at" in ds else []
+        return Restored(x0=[float(v) for v in ds["x0_mean"].values], e0=[float(v) for v in ds["e0"].values],
+                        wall=float(a["wall_time_s"]), resumed_at=resumed)
+
+
+def _to_dataset(systems, batch: Batch, controls: list[RowControl], rec: Recorder, x0, e0, wall: float,
+                resumed_at: list[float], backend: str, interval: float) -> xr.Dataset:
+    data: dict[str, tuple] = {}
+    for name in _BATCH_FIELDS:
+        v = getattr(batch, name)
+        data[f"batch_{name}"] = ([f"batch_{name}_{k}" for k in range(v.ndim)], v)
+    data["config"] = ("row", np.array([s.config.to_toml() for s in systems], dtype=object))
+    data["limit"] = ("row", np.array([c.limit for c in controls], dtype=np.int64))
+    data["samples_done"] = ("row", np.array([c.n for c in controls], dtype=np.int64))
+    data["active"] = ("row", np.array([int(c.active) for c in controls], dtype=np.int8))
+    data["row_status"] = ("row", np.array([str(c.status.value) for c in controls], dtype=object))
+    data["row_message"] = ("row", np.array([c.message for c in controls], dtype=object))
+    data["conv_reached"] = ("row", np.array([int(bool(c.converge and c.converge.reached)) for c in controls], dtype=np.int8))
+    data["conv_sem"] = ("row", np.array([c.converge.sem if c.converge else np.nan for c in controls]))
+    data["x0_mean"] = ("row", np.asarray(x0, dtype=float))
+    data["e0"] = ("row", np.asarray(e0, dtype=float))
+    data["rec_n"] = ("row", np.asarray(rec.n, dtype=np.int64))
+    data["rec_works"] = (("row", "acc"), rec.works)
+    data["resumed_at"] = ("resume", np.asarray(resumed_at, dtype=float))
+    for r, c in enumerate(controls):
+        if c.converge is not None:
+            data[f"conv_f_d_{r}"] = (f"conv_{r}", _cat(c.converge.f_d))
+            data[f"conv_x_mean_{r}"] = (f"conv_{r}", _cat(c.converge.x_mean))
+        samples = rec.samples[r]
+        data[f"rec_samples_{r}"] = ((f"sample_{r}", "out"), np.concatenate(samples) if samples else
+                                    np.zeros((0, S.N_OUT)))
+        data[f"rec_chunk_samples_{r}"] = (f"chunk_{r}", np.array([s.shape[0] for s in samples], dtype=np.int64))
+        data[f"rec_chunk_starts_{r}"] = (f"chunk_{r}", np.asarray(rec.chunk_starts[r], dtype=np.int64))
+        sums = rec.contact_sums[r]
+        nc = rec.n_contacts[r]
+        data[f"rec_contact_sums_{r}"] = ((f"chunk_{r}", f"contact_{r}", "cacc"),
+                                         np.stack(sums) if sums else np.zeros((0, nc, S.N_CACC)))
+    return xr.Dataset(data, attrs={
+        "title": "slipchain run checkpoint (state between chunks; see slipchain.engine.checkpoint)",
+        "checkpoint_format": FORMAT, "slipchain_version": __version__, "backend": backend,
+        "wall_time_s": wall, "t_simulated": float(max(c.n for c in controls) * interval),
+        "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
+
+
+def _cat(parts: list[np.ndarray]) -> np.ndarray:
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
+def _first_difference(a: str, b: str) -> str:
+    la, lb = a.splitlines(), b.splitlines()
+    for p, q in zip(la, lb):
+        if p != q:
+            return f"checkpoint has '{p.strip()}', this run '{q.strip()}'"
+    return "configs differ"
+
+
+def simulated_time(path: str | Path) -> float:
+    """The simulated time (s) a checkpoint has reached (for messages)."""
+    try:
+        import h5netcdf
+
+        with h5netcdf.File(path, "r") as f:
+            return float(f.attrs["t_simulated"])
+    except Exception:  # noqa: BLE001 - only for a message
+        return float("nan")
+
+
+__all__ = ["CHECKPOINT_EVERY", "CheckpointError", "Checkpointer", "Restored", "simulated_time"]

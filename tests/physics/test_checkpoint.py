@@ -1,0 +1,151 @@
+"""Checkpoints: a run stopped at any chunk and resumed gives bit for bit the uninterrupted result.
+
+Two kinds of stop: an exception raised right after the k-th checkpoint write (in process, so the
+stop lands at a known chunk), and a real SIGKILL of ``slipchain run`` once its checkpoint exists
+(wherever the kill lands, the result must be the same). Compared: every variable and attribute of
+the run Dataset except the wall time (and ``resumed_at``, which says that it resumed).
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from slipchain import read_dataset
+from slipchain.engine import checkpoint as ckpt
+from slipchain.engine.simulate import run, simulate_batch
+from slipchain.model.config import make_config
+from slipchain.model.system import build_system
+
+VOLATILE = ("wall_time_s", "resumed_at")
+
+
+def _same(a: xr.Dataset, b: xr.Dataset) -> None:
+    a, b = a.copy(), b.copy()
+    for ds in (a, b):
+        for k in VOLATILE:
+            ds.attrs.pop(k, None)
+    xr.testing.assert_identical(a, b)
+
+
+class Crash(Exception):
+    pass
+
+
+def _crash_after(monkeypatch, saves: int) -> None:
+    """Make the run raise right after its ``saves``-th checkpoint write (a crash between chunks)."""
+    original = ckpt.Checkpointer.save
+
+    def save(self):
+        original(self)
+        if self.writes >= saves:
+            raise Crash(f"injected after checkpoint {self.writes}")
+
+    monkeypatch.setattr(ckpt.Checkpointer, "save", save)
+
+
+CASES = {
+    "fixed length": dict(N=31, theta=0.5, t_total=2.5e-3, seed=2),
+    "automatic length": dict(N=31, theta=0.5, seed=5, sem_target=0.03, t_max=0.02),
+    "dead weight": dict(N=31, theta=0.5, t_total=3e-3, dead_weight=0.5, seed=1),
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_run_crashed_after_a_checkpoint_resumes_bit_for_bit(case, tmp_path, monkeypatch):
+    cfg = CASES[case]
+    reference = run(cfg)
+    path = tmp_path / "run.ckpt.nc"
+    with monkeypatch.context() as m:
+        _crash_after(m, 2)
+        with pytest.raises(Crash):
+            run(cfg, checkpoint=path, checkpoint_every=0)
+    assert path.exists()
+    resumed = run(cfg, checkpoint=path, checkpoint_every=0)
+    _same(reference, resumed)
+    t_resume = float(resumed.attrs["resumed_at"])
+    assert 0 < t_resume < float(reference.attrs["t_total"])
+    # resumed again from the final checkpoint: the same result at once, and a second resume noted
+    again = run(cfg, checkpoint=path)
+    _same(reference, again)
+    assert len(again.attrs["resumed_at"].split(",")) == 2
+
+
+def test_batch_of_rows_with_different_lengths_resumes_bit_for_bit(tmp_path, monkeypatch):
+    """A GPU-style batch (what a sweep task runs): rows stop at different chunks; crash when some
+    have finished and others not."""
+    configs = [make_config(dict(N=31, theta=th, t_total=t, seed=s))
+               for th, t, s in ((0.5, 1.2e-3, 1), (1.0, 3e-3, 2), (0.3, 2e-3, 3))]
+    reference = simulate_batch([build_system(c) for c in configs])
+    path = tmp_path / "batch.nc"
+    with monkeypatch.context() as m:
+        _crash_after(m, 4)  # chunks of 5e-4 s: row 0 has finished (3 chunks), the others not
+        with pytest.raises(Crash):
+            simulate_batch([build_system(c) for c in configs], checkpoint=path, checkpoint_every=0)
+    resumed = simulate_batch([build_system(c) for c in configs], checkpoint=path)
+    for a, b in zip(reference, resumed):
+        _same(a, b)
+
+
+def test_checkpoint_of_another_run_or_unreadable_is_refused(tmp_path, monkeypatch):
+    path = tmp_path / "c.nc"
+    with monkeypatch.context() as m:
+        _crash_after(m, 1)
+        with pytest.raises(Crash):
+            run(dict(N=21, t_total=2e-3), checkpoint=path, checkpoint_every=0)
+    with pytest.raises(ckpt.CheckpointError, match=r"belongs to another run .*seed"):
+        run(dict(N=21, t_total=2e-3, seed=9), checkpoint=path)
+    path.write_bytes(path.read_bytes()[:1000])  # truncated: a full disk, a partial copy
+    with pytest.raises(ckpt.CheckpointError, match="unreadable"):
+        run(dict(N=21, t_total=2e-3), checkpoint=path)
+
+
+def _cli(*args, **kw):
+    return subprocess.Popen([sys.executable, "-m", "slipchain", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **kw)
+
+
+def test_cli_run_killed_with_sigkill_resumes_bit_for_bit(tmp_path):
+    """The issue's test: ``slipchain run --checkpoint`` SIGKILLed, the same command again: the
+    result equals an uninterrupted run. Where the kill lands does not matter (any chunk)."""
+    args = ["run", "--set", "N=41", "--set", "theta=0.6", "--set", "t_total=0.02", "--set", "seed=7", "--json"]
+    ckp, out, full = tmp_path / "run.ckpt", tmp_path / "resumed.nc", tmp_path / "full.nc"
+    proc = _cli(*args, "--checkpoint", str(ckp), "--checkpoint-every", "0", "--out", str(out))
+    t_end = time.time() + 300
+    while not ckp.exists() and proc.poll() is None and time.time() < t_end:
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    assert proc.wait(timeout=60) == -signal.SIGKILL, "the run ended before its first checkpoint"
+    assert ckp.exists() and not out.exists()
+    resumed = _cli(*args, "--checkpoint", str(ckp), "--out", str(out))
+    _, stderr = resumed.communicate(timeout=600)
+    assert resumed.returncode == 0, stderr
+    assert "resuming from checkpoint" in stderr
+    assert not ckp.exists()  # finished and written: the checkpoint is removed
+    plain = _cli(*args, "--out", str(full))
+    plain.communicate(timeout=600)
+    assert plain.returncode == 0
+    a, b = read_dataset(full), read_dataset(out)
+    _same(a, b)
+    assert np.isfinite(a.attrs["mu_star"]) and "resumed_at" in b.attrs
+
+
+def test_cli_refuses_another_runs_checkpoint_with_exit_2_and_writes_nothing(tmp_path, monkeypatch):
+    ckp = tmp_path / "run.ckpt"
+    with monkeypatch.context() as m:
+        _crash_after(m, 1)
+        with pytest.raises(Crash):
+            run(dict(N=21, t_total=2e-3), checkpoint=ckp, checkpoint_every=0)
+    before = ckp.read_bytes()
+    out = tmp_path / "out.nc"
+    proc = subprocess.run([sys.executable, "-m", "slipchain", "run", "--set", "N=21", "--set", "t_total=4e-3",
+                           "--checkpoint", str(ckp), "--out", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 2, proc.stderr
+    assert "belongs to another run" in proc.stderr and "t_total" in proc.stderr and "Traceback" not in proc.stderr
+    assert not out.exists() and ckp.read_bytes() == before
+    assert sorted(os.listdir(tmp_path)) == ["run.ckpt"]
