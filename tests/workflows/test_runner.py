@@ -260,3 +260,48 @@ def test_the_lock_of_a_killed_driver_is_taken_over_with_a_note(tmp_path, client)
     assert rep.ok and len(rep.ran) == 2
     assert len(rep.notes) == 1 and "took over the driver lock" in rep.notes[0] and f"pid {killed.pid}," in rep.notes[0]
     assert not (tmp_path / "s" / "driver.json").exists()
+
+
+def test_worker_killed_mid_member_resumes_it_from_its_checkpoint(tmp_path, client):
+    """A long member keeps a checkpoint; its worker is SIGKILLed once the checkpoint exists; the
+    retried task resumes from it, and the stored member equals a direct run bit for bit."""
+    sw = make_sweep({"name": "c", "base": {**FAST, "t_total": 3 * SLOW_T}, "grid": {"seed": [3]}})
+    (m,) = sw.members
+    st = Store.open(tmp_path / "s", sw)
+    ckpt = st.checkpoint_path([m])
+    pids = client.run(os.getpid)
+    killed = {}
+
+    def killer():
+        t_end = time.time() + 300
+        while time.time() < t_end and not ckpt.exists():
+            time.sleep(0.01)
+        busy = {w: k for w, k in client.processing().items() if k}
+        for addr in busy:
+            os.kill(pids[addr], signal.SIGKILL)
+            killed.update(addr=addr)
+
+    th = threading.Thread(target=killer)
+    th.start()
+    rep = run_sweep(sw, st, client=client, progress=False, checkpoint_every=0.5)
+    th.join()
+    assert killed, "the member's worker was not seen running after its first checkpoint"
+    assert rep.ok, [(o.status, o.message) for o in rep.failed]
+    stored = read_dataset(st.member_path(m.id))
+    assert float(stored.attrs["resumed_at"]) > 0  # the retry resumed, it did not start over
+    direct = run(m.config)
+    for k in ("f_d", "x_mean", "X_mean", "x", "u", "contact_force_mean"):
+        assert (stored[k].values == direct[k].values).all(), k
+    assert stored.attrs["mu_star"] == direct.attrs["mu_star"]
+    assert not ckpt.exists() and not list((st.path / "checkpoints").iterdir())  # removed once stored
+    client.wait_for_workers(2, timeout=60)
+
+
+def test_stale_checkpoints_are_pruned(tmp_path, client):
+    sw = _sweep()
+    st = Store.open(tmp_path / "s", sw)
+    stale = st.path / "checkpoints" / "0123456789abcdef.nc"
+    stale.parent.mkdir()
+    stale.write_bytes(b"from an earlier batching")
+    rep = run_sweep(sw, st, client=client, progress=False)
+    assert rep.ok and not stale.exists()

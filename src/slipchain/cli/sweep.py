@@ -13,7 +13,7 @@ from rich.table import Table
 from ..engine.backends import BackendName
 from ..results.schema import Status
 from ..sweeps.definition import Preset, SweepError, load_sweep_definition
-from ..sweeps.executor import SweepReport, run_sweep
+from ..sweeps.executor import SWEEP_CHECKPOINT_EVERY, SweepReport, run_sweep
 from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, sweep_exit
 
 
@@ -25,11 +25,14 @@ def sweep(
     progress: ProgressOpt = None,
     backend: BackendOpt = BackendName.CPU,
     batch_size: Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Members per task, advanced together (default 1; 256 on the GPU).")] = None,
+    checkpoint_every: Annotated[float, typer.Option(
+        "--checkpoint-every", min=0.0, help="Wall-clock seconds between checkpoints of a running task, in STORE/checkpoints "
+        "(a killed task resumes from its checkpoint).")] = SWEEP_CHECKPOINT_EVERY,
 ) -> None:
     """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
     try:
         report = run_sweep(load_sweep_definition(definition), store, scheduler=scheduler, n_workers=workers,
-                           progress=progress, backend=backend, batch_size=batch_size)
+                           progress=progress, backend=backend, batch_size=batch_size, checkpoint_every=checkpoint_every)
     except SweepError as e:
         fail(str(e))
     print_sweep_report(report)

@@ -16,6 +16,11 @@ atomic). What survives what:
   ``distributed.scheduler.allowed-failures`` times, default 3, then the member fails with
   ``KilledWorker`` and the reason is recorded).
 * a member raises or diverges: it is written to ``failed/`` with its reason; the others go on.
+* a long member (longer than ``checkpoint_every``, default 2 minutes) keeps a checkpoint of its
+  task in ``checkpoints/``: a task rescheduled after its worker died, or submitted again by the next
+  driver, resumes from it, bit for bit, instead of starting over. Workers write it to the store's
+  path, so on a remote cluster the checkpoints need a shared file system (without one a write
+  fails with a warning and the task simply starts over when retried).
 
 Default scheduler: a ``LocalCluster`` of one single-threaded worker process per core on
 loopback. ``scheduler="tcp://host:8786"`` uses an existing cluster instead (for example one
@@ -31,6 +36,7 @@ import signal
 import sys
 import threading
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +46,7 @@ import xarray as xr
 
 from .._version import __version__
 from ..engine.backends import BackendName
+from ..engine.checkpoint import CheckpointError
 from ..engine.simulate import simulate_batch
 from ..model.config import Config
 from ..model.system import build_system
@@ -50,12 +57,26 @@ from .store import Store
 ERROR = Status.ERROR.value
 GPU_BATCH = 256  # members per task with the GPU backend
 GPU_THREADS = 4  # tasks the GPU worker runs at once (each batch on its own CUDA stream, so they overlap)
+SWEEP_CHECKPOINT_EVERY = 120.0  # wall-clock s between checkpoints of a task: members shorter than this write none
 
 
-def run_members(configs: list[Config], backend: str = BackendName.CPU) -> list[xr.Dataset]:
+def run_members(configs: list[Config], backend: str = BackendName.CPU, checkpoint: str | None = None,
+                checkpoint_every: float = SWEEP_CHECKPOINT_EVERY) -> list[xr.Dataset]:
     """Sweep members (executed on a worker): build the systems, simulate them as one batch (one
-    kernel launch advances all of them; a batch of one is a plain run), return the Datasets."""
-    return simulate_batch([build_system(c) for c in configs], backend=str(backend), progress=False)
+    kernel launch advances all of them; a batch of one is a plain run), return the Datasets.
+
+    ``checkpoint``: the task's checkpoint file (:mod:`slipchain.engine.checkpoint`), written every
+    ``checkpoint_every`` wall-clock seconds; a task retried after its worker died, or run again
+    by the next driver, resumes from it (bit for bit) instead of starting over."""
+    systems = [build_system(c) for c in configs]
+    try:
+        return simulate_batch(systems, backend=str(backend), progress=False, checkpoint=checkpoint,
+                              checkpoint_every=checkpoint_every)
+    except CheckpointError as e:  # unusable (e.g. cut by a failing disk): start the task over without it
+        warnings.warn(f"{e}; starting the task over", RuntimeWarning, stacklevel=2)
+        Path(checkpoint).unlink(missing_ok=True)
+        return simulate_batch(systems, backend=str(backend), progress=False, checkpoint=checkpoint,
+                              checkpoint_every=checkpoint_every)
 
 
 def batches(members: list[Member], size: int) -> list[list[Member]]:
@@ -148,7 +169,8 @@ def dask_client(scheduler: str | None = None, n_workers: int | None = None,
 
 def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, scheduler: str | None = None,
               n_workers: int | None = None, client: object | None = None, progress: bool | None = None,
-              backend: str | BackendName = BackendName.CPU, batch_size: int | None = None) -> SweepReport:
+              backend: str | BackendName = BackendName.CPU, batch_size: int | None = None,
+              checkpoint_every: float | None = SWEEP_CHECKPOINT_EVERY) -> SweepReport:
     """Run the members of ``sweep`` that ``store`` does not hold yet; write each as it finishes.
 
     ``client``: an existing ``distributed.Client`` to use (tests); else ``scheduler`` (an
@@ -157,7 +179,8 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     part of their identity, so CPU and GPU members share a store). ``batch_size``: members per task, advanced together by one kernel launch
     (:func:`run_members`); default 1 on the CPU, 256 with ``backend = 'gpu'``. With the GPU the
     local cluster is one worker process with GPU_THREADS threads: up to that many batches (of
-    different N or dt) advance at once, each on its own CUDA stream.
+    different N or dt) advance at once, each on its own CUDA stream. ``checkpoint_every``: wall-clock
+    seconds between the checkpoints of a running task (None: no checkpoints; see the module docstring).
     """
     threads = 1
     if backend == "gpu":  # one worker process owns the GPU; its threads run batches on separate streams
@@ -166,11 +189,13 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
         threads = GPU_THREADS
     st = store if isinstance(store, Store) else Store.open(store, sweep)
     with st.driver_lock() as note:  # SweepError, naming the holder, if another driver runs this store
-        return _run_locked(st, note, batch_size, client, scheduler, n_workers, threads, progress, backend)
+        return _run_locked(st, note, batch_size, client, scheduler, n_workers, threads, progress, backend,
+                           checkpoint_every)
 
 
 def _run_locked(st: Store, note: str | None, batch_size: int | None, client, scheduler: str | None,
-                n_workers: int | None, threads: int, progress: bool | None, backend: str) -> SweepReport:
+                n_workers: int | None, threads: int, progress: bool | None, backend: str,
+                checkpoint_every: float | None) -> SweepReport:
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     done = st.completed_ids()
@@ -180,7 +205,8 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
         with _interrupt_flag():
-            _run_groups(pending, batch_size, client, scheduler, n_workers, threads, st, report, bar, backend)
+            _run_groups(pending, batch_size, client, scheduler, n_workers, threads, st, report, bar, backend,
+                        checkpoint_every)
     except KeyboardInterrupt:
         report.interrupted = True
     finally:
@@ -196,27 +222,31 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
 
 
 def _run_groups(pending: list[Member], batch_size: int | None, client, scheduler: str | None, n_workers: int | None,
-                threads: int, st: Store, report: SweepReport, bar: "_SweepProgress", backend: str) -> None:
+                threads: int, st: Store, report: SweepReport, bar: "_SweepProgress", backend: str,
+                checkpoint_every: float | None) -> None:
     """Submit the pending members (in batches) to ``client`` or a new cluster and store each result."""
+    groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
+    st.prune_checkpoints(groups)  # those of earlier batchings or of members stored since
     if not pending:
         return
-    groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
     if client is not None:
-        _execute(client, st, groups, report, bar, backend)
+        _execute(client, st, groups, report, bar, backend, checkpoint_every)
     else:
         with dask_client(scheduler, n_workers, threads) as c:
             _check_interrupt()
-            _execute(c, st, groups, report, bar, backend)
+            _execute(c, st, groups, report, bar, backend, checkpoint_every)
 
 
 def _execute(client, st: Store, groups: list[list[Member]], report: SweepReport, bar: "_SweepProgress",
-             backend: str) -> None:
+             backend: str, checkpoint_every: float | None) -> None:
     from distributed import as_completed
 
     futures = {}
     for g in groups:
-        fut = client.submit(run_members, [m.config for m in g], str(backend), key=f"slipchain-{g[0].id}-{len(g)}",
-                            priority=max(expected_cost(m) for m in g), pure=False)
+        ckpt = None if checkpoint_every is None else str(st.checkpoint_path(g).resolve())
+        fut = client.submit(run_members, [m.config for m in g], str(backend), ckpt,
+                            SWEEP_CHECKPOINT_EVERY if checkpoint_every is None else checkpoint_every,
+                            key=f"slipchain-{g[0].id}-{len(g)}", priority=max(expected_cost(m) for m in g), pure=False)
         futures[fut] = g
     try:
         done = as_completed(list(futures))
@@ -287,6 +317,7 @@ def _store_task(fut, group: list[Member], st: Store, report: SweepReport, bar: "
                                   float(a.get("mu_star", float("nan"))), float(a.get("mu_star_sem", float("nan"))),
                                   float(a.get("wall_time_s", float("nan")))))
         bar.advance(report)
+    st.checkpoint_path(group).unlink(missing_ok=True)  # its members are stored: the task's state is done with
     fut.release()
 
 
@@ -319,5 +350,5 @@ class _SweepProgress:
             self._bar.stop()
 
 
-__all__ = ["GPU_BATCH", "GPU_THREADS", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
+__all__ = ["GPU_BATCH", "GPU_THREADS", "SWEEP_CHECKPOINT_EVERY", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
            "run_sweep"]

@@ -7,6 +7,8 @@ Layout of a store directory::
                         final state, config TOML, seed, status, package version in its attrs)
     failed/<id>.nc      the latest failed attempt of a member (status diverged or error, with
                         the reason in ``message``); rerun on resume, removed once it completes
+    checkpoints/<key>.nc  the state of a long task still running (or killed), to resume from; a
+                        task's file is removed once its members are stored
     index.csv           one row per member (point, status, mu_star, ...): a readable summary,
                         rebuilt from the files above, never the source of truth
     invocations.jsonl   one line per sweep invocation (start, wall time, counts): a log
@@ -24,6 +26,7 @@ leave inconsistent. ``<id>`` is the hash of the member's full config (:func:`sli
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import os
@@ -46,6 +49,7 @@ DEFINITION = "sweep.toml"
 MEMBERS = "members"
 FAILED = "failed"
 INDEX = "index.csv"
+CHECKPOINTS = "checkpoints"
 LOG = "invocations.jsonl"
 LOCK = ".driver.lock"
 HOLDER = "driver.json"
@@ -132,6 +136,20 @@ class Store:
 
     def failed_path(self, mid: str) -> Path:
         return self.path / FAILED / f"{mid}.nc"
+
+    def checkpoint_path(self, group: list[Member]) -> Path:
+        """The checkpoint file of the task that runs ``group`` (named by the hash of its member ids)."""
+        key = group[0].id if len(group) == 1 else hashlib.sha1(" ".join(m.id for m in group).encode()).hexdigest()[:16]
+        return self.path / CHECKPOINTS / f"{key}.nc"
+
+    def prune_checkpoints(self, groups: list[list[Member]]) -> list[Path]:
+        """Remove checkpoint files that no task of ``groups`` will use (their members were stored, or
+        were batched differently); returns what was removed."""
+        keep = {self.checkpoint_path(g) for g in groups}
+        gone = [p for p in sorted((self.path / CHECKPOINTS).glob("*.nc")) if p not in keep]
+        for p in gone:
+            p.unlink(missing_ok=True)
+        return gone
 
     def completed_ids(self) -> set[str]:
         return _ids_in(self.path / MEMBERS)
