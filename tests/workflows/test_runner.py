@@ -305,3 +305,50 @@ def test_stale_checkpoints_are_pruned(tmp_path, client):
     stale.write_bytes(b"from an earlier batching")
     rep = run_sweep(sw, st, client=client, progress=False)
     assert rep.ok and not stale.exists()
+
+
+def test_a_corrupt_member_file_is_reported_by_id_then_quarantined_and_rerun(tmp_path, client):
+    # Before: a truncated file in members/ made the next `slipchain sweep` (and open_sweep, and
+    # every figure command) die with an h5py OSError traceback.
+    from rich.console import Console
+
+    from slipchain.cli import print_sweep_report
+    from slipchain.sweeps import SweepError, SweepWarning, open_sweep
+    from slipchain.workflows.figures import sweep_dataset
+
+    sw = make_sweep({"name": "q", "base": FAST, "grid": {"theta": [0.5, 1.0], "epsilon": [0.005, 0.01]}})
+    assert run_sweep(sw, tmp_path / "s", client=client, progress=False).ok
+    st = Store.open(tmp_path / "s")
+    before = open_sweep(st.path)
+    cut, garbled = sw.members[1], sw.members[2]
+    data = st.member_path(cut.id).read_bytes()
+    st.member_path(cut.id).write_bytes(data[: len(data) // 2])  # a full disk / a partial copy
+    st.member_path(garbled.id).write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(range(256)) * 8)  # not a file it wrote
+
+    ds = open_sweep(st.path)  # reports, does not crash
+    bad = ds["status"].values == "unreadable"
+    assert sorted(ds["member_id"].values[bad].tolist()) == sorted([cut.id, garbled.id])
+    assert all(f"{m.id}.nc" in str(ds["message"].values[ds["member_id"].values == m.id][0]) for m in (cut, garbled))
+    with pytest.raises(SweepError, match=cut.id):
+        st.read_member(cut)
+    with pytest.warns(SweepWarning, match=cut.id):
+        sweep_dataset(st.path, {"theta"}, "a figure")
+    fig = subprocess.run([sys.executable, "-m", "slipchain", "figure", "epsilon", "--store", str(st.path),
+                          "--out", str(tmp_path / "fig")], capture_output=True, text=True, timeout=120)
+    assert fig.returncode == 0 and "Traceback" not in fig.stderr, fig.stderr
+    assert "warning:" in fig.stderr and cut.id in fig.stderr and garbled.id in fig.stderr
+
+    rep = run_sweep(sw, st, client=client, progress=False)
+    assert rep.ok and sorted(mid for mid, _ in rep.quarantined) == sorted([cut.id, garbled.id])
+    assert sorted(o.member.id for o in rep.ran) == sorted([cut.id, garbled.id]) and len(rep.skipped) == 2
+    q = st.path / "quarantine"
+    assert (q / f"{cut.id}.nc").read_bytes() == data[: len(data) // 2]  # kept as found, for a post-mortem
+    assert "truncated" in (q / f"{cut.id}.reason.txt").read_text()
+    after = open_sweep(st.path)
+    assert (after["status"] == "completed").all()
+    assert (after["mu_star"].values == before["mu_star"].values).all()  # rerun: the same numbers, bit for bit
+    console = Console(record=True, width=200)
+    print_sweep_report(rep, console)
+    text = console.export_text()
+    assert re.search(r"quarantined \(unreadable file, rerun\)\s*│\s*2", text) and cut.id in text
+    assert run_sweep(sw, st, client=client, progress=False).quarantined == []  # the store is healthy again

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import typer
 
-from .common import EXIT_CODES
+from .common import EXIT_CODES, show_warnings
 from .figure import figure_app
 from .run import run
 from .sweep import mechanism, print_sweep_report, reproduce, sweep
@@ -27,6 +27,7 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
 @app.callback()
 def _main() -> None:
     """slipchain: simulate, sweep and plot the multi-contact friction model."""
+    show_warnings()
 
 
 app.command()(run)

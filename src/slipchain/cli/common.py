@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Annotated, NoReturn, Optional
 
 import typer
@@ -23,6 +24,25 @@ def fail(message: str) -> NoReturn:
     """Rejected input: the message on stderr, exit code 2."""
     err.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
     raise typer.Exit(2)
+
+
+def show_warnings() -> None:
+    """Print slipchain's own warnings (SweepWarning: an unreadable member left out, ...) as one
+    ``warning:`` line on stderr, without Python's source line; other warnings as Python shows them."""
+    from ..sweeps.definition import SweepWarning
+
+    default = warnings.showwarning
+    if getattr(default, "slipchain", False):  # installed already (several commands in one process)
+        return
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, SweepWarning):
+            err.print(f"warning: {message}", markup=False, highlight=False, soft_wrap=True)
+        else:
+            default(message, category, filename, lineno, file, line)
+
+    show.slipchain = True
+    warnings.showwarning = show
 
 
 def wrote(paths) -> None:

@@ -51,6 +51,8 @@ def print_sweep_report(report: SweepReport, console: Console | None = None) -> N
     table.add_row("ran, completed", str(len(completed)))
     table.add_row("ran, failed", str(len(report.failed)))
     table.add_row("skipped (already in the store)", str(len(report.skipped)))
+    if report.quarantined:
+        table.add_row("quarantined (unreadable file, rerun)", str(len(report.quarantined)))
     table.add_row("not run" + (" (interrupted)" if report.interrupted else ""), str(report.not_run))
     table.add_row("total", str(report.total))
     table.add_row("wall time", f"{report.wall_time_s:.1f} s")
@@ -62,6 +64,13 @@ def print_sweep_report(report: SweepReport, console: Console | None = None) -> N
         for o in report.failed:
             ft.add_row(o.member.label(), o.status, o.message)
         console.print(ft)
+    if report.quarantined:
+        qt = Table(title=f"unreadable member files moved to {report.store / 'quarantine'} (their members were rerun)")
+        for col in ("member id", "reason"):
+            qt.add_column(col, overflow="fold")
+        for mid, reason in report.quarantined:
+            qt.add_row(mid, reason)
+        console.print(qt)
 
 
 def reproduce(

@@ -26,7 +26,7 @@ from .velocity import VelocityStatus, steady_velocity
 
 
 class Status(StrEnum):
-    """Status of a run (the first four) or of a point of a sweep grid (``missing``, ``absent``).
+    """Status of a run (the first four) or of a point of a sweep grid (``missing``, ``absent``, ``unreadable``).
 
     str-valued: files hold the plain words, and ``ds.attrs["status"] == Status.COMPLETED`` works
     on files written before the enum existed.
@@ -38,6 +38,7 @@ class Status(StrEnum):
     ERROR = "error"  # the run raised (a sweep task that failed; the message holds the exception)
     MISSING = "missing"  # sweep grid: a member not run yet
     ABSENT = "absent"  # sweep grid: a combination that no grid of the sweep contains
+    UNREADABLE = "unreadable"  # sweep grid: the member's file cannot be read (quarantined and rerun by the next sweep)
 
 
 # A dead-weight run faster than this times v0*10**delta has left the rising branch of mu(v).
@@ -151,6 +152,8 @@ _STATUS_MEANING = {
     Status.ERROR: "the run raised (a failed sweep task; the message holds the exception)",
     Status.MISSING: "sweep grid: a member not run yet",
     Status.ABSENT: "sweep grid: a combination that no grid of the sweep contains",
+    Status.UNREADABLE: "sweep grid: the member's file cannot be read (the message says why); the next sweep "
+                       "moves it to quarantine/ and reruns the member",
 }
 
 

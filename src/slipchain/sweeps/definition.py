@@ -51,6 +51,11 @@ class SweepError(ValueError):
     """A rejected sweep definition or store; the message names the key, the value and what is allowed."""
 
 
+class SweepWarning(UserWarning):
+    """Something about a store the user should know that does not stop the job (e.g. an unreadable
+    member, left out of a figure); the CLI prints it as one ``warning:`` line."""
+
+
 @dataclass(frozen=True)
 class Member:
     """One run of a sweep: its coordinates along the sweep dimensions and its full config."""

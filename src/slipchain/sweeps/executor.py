@@ -16,6 +16,9 @@ atomic). What survives what:
   ``distributed.scheduler.allowed-failures`` times, default 3, then the member fails with
   ``KilledWorker`` and the reason is recorded).
 * a member raises or diverges: it is written to ``failed/`` with its reason; the others go on.
+* a member file was damaged after it was written (a full disk, a partial copy): at its start the
+  driver opens the header of every member file; one that cannot be read is moved to
+  ``quarantine/`` with the reason and its member is rerun (:meth:`slipchain.sweeps.store.Store.check_members`).
 * a long member (longer than ``checkpoint_every``, default 2 minutes) keeps a checkpoint of its
   task in ``checkpoints/``: a task rescheduled after its worker died, or submitted again by the next
   driver, resumes from it, bit for bit, instead of starting over. Workers write it to the store's
@@ -129,6 +132,7 @@ class SweepReport:
     ran: list[Outcome] = field(default_factory=list)
     interrupted: bool = False
     notes: list[str] = field(default_factory=list)  # e.g. a stale driver lock taken over
+    quarantined: list[tuple[str, str]] = field(default_factory=list)  # (member id, reason): unreadable files moved aside, rerun
     wall_time_s: float = 0.0
 
     @property
@@ -198,9 +202,11 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
                 checkpoint_every: float | None) -> SweepReport:
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    quarantined = st.check_members()  # unreadable member files: moved to quarantine/, their members rerun
     done = st.completed_ids()
     report = SweepReport(store=st.path, total=len(st.sweep.members),
-                         skipped=[m for m in st.sweep.members if m.id in done], notes=[note] if note else [])
+                         skipped=[m for m in st.sweep.members if m.id in done], notes=[note] if note else [],
+                         quarantined=quarantined)
     pending = sorted(st.pending(), key=expected_cost, reverse=True)
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
@@ -217,7 +223,8 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
                            "failed": len(report.failed), "skipped": len(report.skipped), "total": report.total,
                            "interrupted": report.interrupted, "scheduler": scheduler or ("client" if client else "local"),
                            "n_workers": n_workers or (None if scheduler or client else default_workers()),
-                           "backend": str(backend), "notes": report.notes, "slipchain_version": __version__})
+                           "backend": str(backend), "notes": report.notes,
+                           "quarantined": [mid for mid, _ in report.quarantined], "slipchain_version": __version__})
     return report
 
 

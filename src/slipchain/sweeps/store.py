@@ -7,6 +7,9 @@ Layout of a store directory::
                         final state, config TOML, seed, status, package version in its attrs)
     failed/<id>.nc      the latest failed attempt of a member (status diverged or error, with
                         the reason in ``message``); rerun on resume, removed once it completes
+    quarantine/<id>.nc  a member file found unreadable (truncated by a full disk, a partial copy,
+                        a failing file system) when a sweep started, moved aside with the reason in
+                        quarantine/<id>.reason.txt; the member is rerun
     checkpoints/<key>.nc  the state of a long task still running (or killed), to resume from; a
                         task's file is removed once its members are stored
     index.csv           one row per member (point, status, mu_star, ...): a readable summary,
@@ -50,13 +53,14 @@ MEMBERS = "members"
 FAILED = "failed"
 INDEX = "index.csv"
 CHECKPOINTS = "checkpoints"
+QUARANTINE = "quarantine"
 LOG = "invocations.jsonl"
 LOCK = ".driver.lock"
 HOLDER = "driver.json"
 
 # Per-member numbers gathered into the sweep Dataset (from the run schema): variable -> (attr, meaning).
 SUMMARY_VARS = SWEEP_VARIABLES
-ABSENT, MISSING = Status.ABSENT.value, Status.MISSING.value
+ABSENT, MISSING, UNREADABLE = Status.ABSENT.value, Status.MISSING.value, Status.UNREADABLE.value
 
 
 class Store:
@@ -183,7 +187,11 @@ class Store:
             path = self.failed_path(mid)
         if not path.exists():
             raise SweepError(f"member {mid} has not been run yet (store {str(self.path)!r})")
-        return read_dataset(path)
+        try:
+            return read_dataset(path)
+        except (OSError, ValueError, KeyError, RuntimeError) as e:
+            raise SweepError(f"member {mid} of store {str(self.path)!r} is unreadable ({path}: {type(e).__name__}: {e}); "
+                             "run the same `slipchain sweep` again: it quarantines and reruns it") from e
 
     def find(self, **coords: Any) -> Member:
         """The member at the given sweep coordinates (all dimensions must be given)."""
@@ -197,11 +205,51 @@ class Store:
 
     # --- the sweep as one Dataset ---------------------------------------------------------
     def member_attrs(self, member: Member) -> dict[str, Any] | None:
+        """The attributes of the member's file (completed, else failed); None if it has none.
+
+        A file that cannot be read gives ``status = 'unreadable'`` and the reason in ``message``
+        (the next ``slipchain sweep`` quarantines and reruns it), never an exception.
+        """
         for path in (self.member_path(member.id), self.failed_path(member.id)):
             if path.exists():
-                with h5netcdf.File(path, "r") as f:
-                    return {k: _plain(v) for k, v in f.attrs.items()}
+                try:
+                    return read_attrs(path)
+                except UnreadableMember as e:
+                    return {"status": UNREADABLE, "message": str(e)}
         return None
+
+    def check_members(self) -> list[tuple[str, str]]:
+        """Open the header of every member file (members/ and failed/); move each one that cannot be
+        read, or that names another member, to quarantine/ with the reason beside it.
+
+        Returns ``[(member id, reason), ...]`` of what was moved; those members are then pending
+        and the sweep reruns them. Cheap: only the HDF5 superblock and the attributes are read
+        (a truncated file fails there, its end-of-file address being past the end).
+        """
+        moved = []
+        for folder in (self.path / MEMBERS, self.path / FAILED):
+            for path in sorted(folder.glob("*.nc")) if folder.is_dir() else []:
+                if path.name.startswith("."):
+                    continue
+                try:
+                    attrs = read_attrs(path)
+                    if attrs.get("member_id", path.stem) != path.stem:
+                        raise UnreadableMember(f"{path} holds member {attrs['member_id']!r}, not {path.stem!r}")
+                except UnreadableMember as e:
+                    self._quarantine(path, str(e))
+                    moved.append((path.stem, str(e)))
+        return moved
+
+    def _quarantine(self, path: Path, reason: str) -> Path:
+        folder = self.path / QUARANTINE
+        folder.mkdir(exist_ok=True)
+        dest = folder / path.name
+        if dest.exists():  # quarantined before: keep both
+            dest = folder / f"{path.stem}.{time.strftime('%Y%m%dT%H%M%S')}.{os.getpid()}.nc"
+        os.replace(path, dest)
+        write_text_atomic(dest.with_suffix(".reason.txt"),
+                          f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')} moved here from {path.parent.name}/: {reason}\n")
+        return dest
 
     def dataset(self) -> xr.Dataset:
         """Per-member results on the sweep's labelled grid: one dimension per swept parameter.
@@ -285,6 +333,19 @@ def open_sweep(path: str | os.PathLike) -> xr.Dataset:
     return Store.open(path).dataset()
 
 
+class UnreadableMember(Exception):
+    """A member file that cannot be opened (the message names the file and the reason)."""
+
+
+def read_attrs(path: Path) -> dict[str, Any]:
+    """The global attributes of a NetCDF file, opening only its header; UnreadableMember if it cannot be."""
+    try:
+        with h5netcdf.File(path, "r") as f:
+            return {k: _plain(v) for k, v in f.attrs.items()}
+    except Exception as e:  # h5py raises OSError, but also ValueError/KeyError/RuntimeError on odd bytes
+        raise UnreadableMember(f"{path.name}: {type(e).__name__}: {e}") from e
+
+
 def _holder_text(record: Path) -> str:
     try:
         h = json.loads(record.read_text())
@@ -323,4 +384,4 @@ def _difference(a: SweepDefinition, b: SweepDefinition) -> str:
     return ", ".join(diffs[:6]) or "same values, different package defaults"
 
 
-__all__ = ["ABSENT", "MISSING", "Store", "open_sweep"]
+__all__ = ["ABSENT", "MISSING", "UNREADABLE", "Store", "UnreadableMember", "open_sweep", "read_attrs"]

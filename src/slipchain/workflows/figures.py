@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 
 import pandas as pd
@@ -17,15 +18,25 @@ from ..model.config import load_config
 from ..plots.mechanism import plot_dead_weight, plot_epsilon, plot_velocity
 from ..plots.paper import plot_fig5, plot_fig6
 from ..plots.tester import plot_model_vs_experiment
-from ..sweeps.definition import SweepError
+from ..results.schema import Status
+from ..sweeps.definition import SweepError, SweepWarning
 from ..sweeps.store import Store
 
 
 def sweep_dataset(store: str | os.PathLike, needs: set[str], what: str) -> xr.Dataset:
-    """The sweep Dataset of a store that sweeps at least ``needs``; SweepError naming what is missing."""
+    """The sweep Dataset of a store that sweeps at least ``needs``; SweepError naming what is missing.
+
+    Members whose files cannot be read are left out (status ``unreadable``, like a missing member)
+    with a SweepWarning naming them by id."""
     ds = Store.open(store).dataset()
     if not needs <= set(ds.dims):
         raise SweepError(f"store {str(store)!r} sweeps {list(ds.dims)}; {what} needs {', '.join(sorted(needs))}")
+    bad = ds["status"].values == Status.UNREADABLE
+    if bad.any():
+        ids = sorted(ds["member_id"].values[bad].tolist())
+        warnings.warn(f"store {str(store)!r}: {len(ids)} member file(s) cannot be read and are left out of {what}: "
+                      f"{', '.join(ids)} (run the same `slipchain sweep` again to quarantine and rerun them)",
+                      SweepWarning, stacklevel=2)
     return ds
 
 
