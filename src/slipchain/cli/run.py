@@ -42,7 +42,8 @@ def run(
                   markup=False, highlight=False, soft_wrap=True)
     try:
         ds = run_model(cfg, backend=backend, progress=progress, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
-    except (RuntimeError, CheckpointError) as e:  # e.g. backend 'gpu' without a GPU; another run's checkpoint
+    except (RuntimeError, CheckpointError, ConfigError) as e:  # backend 'gpu' without a GPU; another run's
+        # checkpoint; a run too large for the memory (MemoryEstimateError)
         fail(str(e))
     if out_path is not None:
         write_dataset(ds, out_path)

@@ -27,6 +27,7 @@ from .backends import BackendName, Batch, get_backend
 from .checkpoint import CHECKPOINT_EVERY, Checkpointer
 from .control import CHUNK_TIME, row_control
 from .driver import drive
+from .memory import check_memory
 from .observers import ProgressBar, Recorder
 
 
@@ -38,11 +39,13 @@ def run(config: Config | Mapping[str, Any] | None = None, *, backend: str | Back
     ``checkpoint``: a file for the run's state, written every ``checkpoint_every`` wall-clock
     seconds and at the end; if it exists, the run resumes from it and gives bit for bit the result
     of an uninterrupted run (:mod:`slipchain.engine.checkpoint`; CheckpointError if it belongs to
-    another config). Delete it once the result is saved.
+    another config). Delete it once the result is saved. A run that would not fit in memory is
+    refused before anything is allocated (:class:`.memory.MemoryEstimateError`, a ConfigError).
 
     **Returns:** the run Dataset (docs/run-schema.md).
     """
     cfg = config if isinstance(config, Config) else make_config(dict(config or {}))
+    check_memory([cfg])
     return simulate(build_system(cfg), backend=backend, progress=progress, checkpoint=checkpoint,
                     checkpoint_every=checkpoint_every)
 
@@ -73,6 +76,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
         if (c.N, c.dt, c.sample_steps) != (cfg0.N, cfg0.dt, cfg0.sample_steps):
             raise ValueError("a batch needs equal N, dt and output_interval; got "
                              f"{(c.N, c.dt, c.output_interval)} and {(cfg0.N, cfg0.dt, cfg0.output_interval)}")
+    check_memory([s.config for s in systems])  # MemoryEstimateError before the batch is allocated
     engine = get_backend(backend)
     states0 = [initial_state(s) if states is None or states[i] is None else states[i].copy()
                for i, s in enumerate(systems)]

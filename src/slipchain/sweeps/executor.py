@@ -50,6 +50,7 @@ import xarray as xr
 from .._version import __version__
 from ..engine.backends import BackendName
 from ..engine.checkpoint import CheckpointError
+from ..engine.memory import check_memory
 from ..engine.simulate import simulate_batch
 from ..model.config import Config
 from ..model.system import build_system
@@ -71,6 +72,7 @@ def run_members(configs: list[Config], backend: str = BackendName.CPU, checkpoin
     ``checkpoint``: the task's checkpoint file (:mod:`slipchain.engine.checkpoint`), written every
     ``checkpoint_every`` wall-clock seconds; a task retried after its worker died, or run again
     by the next driver, resumes from it (bit for bit) instead of starting over."""
+    check_memory(configs)  # a member too large for this worker fails with the reason, before allocating
     systems = [build_system(c) for c in configs]
     try:
         return simulate_batch(systems, backend=str(backend), progress=False, checkpoint=checkpoint,

@@ -1,0 +1,51 @@
+"""The memory check (issue 11, item 5): a run too large for the machine is refused before it allocates."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from slipchain import make_config
+from slipchain.engine.memory import GiB, MemoryEstimateError, available_bytes, check_memory, estimate_bytes
+from slipchain.model.config import ConfigError
+
+
+def test_cli_refuses_a_run_too_large_for_memory_naming_N_and_writes_nothing(tmp_path):
+    # Before: killed by the kernel's OOM killer (exit 137, no message) after minutes of swapping.
+    out = tmp_path / "big.nc"
+    r = subprocess.run([sys.executable, "-m", "slipchain", "run", "--set", "N=1000000000", "--out", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr and r.stderr.startswith("error: N = 1000000000")
+    assert "GiB of memory" in r.stderr and "available" in r.stderr
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_the_estimate_grows_as_the_arrays_do_and_a_batch_counts_every_row():
+    c = make_config(N=10_000, theta=1.0, t_total=1e-2)
+    assert estimate_bytes(make_config(N=20_000, theta=1.0, t_total=1e-2)) == pytest.approx(2 * estimate_bytes(c), rel=0.01)
+    longer = estimate_bytes(make_config(N=10_000, theta=1.0, t_total=2e-2)) - estimate_bytes(c)
+    assert longer == pytest.approx(10_000 * 4 * 8 * 20, rel=0.05)  # per-chunk contact sums: 20 more chunks of 0.5 ms
+    one = check_memory([c], available=10 * GiB)
+    with pytest.raises(MemoryEstimateError, match="3 realisations run together") as e:
+        check_memory([c] * 3, available=int(2.5 * one) + 300 * 2**20)
+    assert isinstance(e.value, ConfigError) and "N = 10000" in str(e.value)
+    have = available_bytes()
+    assert have is None or 0 < have < 2**50
+
+
+def test_the_estimate_covers_the_measured_peak_memory_without_refusing_what_fits():
+    # Independent measurement: the growth of the peak resident set of a fresh process from a small
+    # run (compiled, warm) to a large one. The estimate must cover it, and not by more than 1.6x.
+    child = ("import json,resource; from slipchain import make_config, run\n"
+             "from slipchain.engine.memory import estimate_bytes\n"
+             "run(make_config(N=101, theta=0.5, t_total=2e-6, output_interval=1e-6, start='steady'))\n"
+             "r0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024\n"
+             "c = make_config(N=600_000, theta=1.0, t_total=2e-6, output_interval=1e-6, start='steady')\n"
+             "run(c)\n"
+             "print(json.dumps([resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 - r0, estimate_bytes(c)]))")
+    r = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    measured, estimate = json.loads(r.stdout.strip().splitlines()[-1])
+    assert measured <= estimate <= 1.6 * measured, (measured, estimate)
