@@ -118,3 +118,13 @@ def test_backend_is_not_a_config_key_but_old_files_with_it_still_load(tmp_path):
     index = Path(__file__).resolve().parents[2] / "docs" / "fig6-paper" / "index.csv"
     frozen = {row["member_id"] for row in csv.DictReader(index.open())}
     assert {member_id(m.config) for m in load_preset("paper").members} == frozen and len(frozen) == 368
+
+
+@pytest.mark.parametrize("delta", [309.0, 312.0, 1e300])
+def test_delta_beyond_the_float_range_is_refused_by_name(delta):
+    # Found by the CLI fuzzer: delta = 312 gave "dt < 0 s" (v* underflowed to 0), delta = 309 an
+    # OverflowError traceback.
+    with pytest.raises(ConfigError, match=r"config key 'delta' has value .*v0\*10\*\*-delta"):
+        make_config(delta=delta)
+    with pytest.raises(ConfigError, match="config key 'dt'"):  # ordinary floats: past the delta check, then dt's
+        make_config(delta=100.0)

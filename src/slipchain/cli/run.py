@@ -12,6 +12,7 @@ from rich.table import Table
 
 from ..engine.backends import BackendName
 from ..engine.checkpoint import CHECKPOINT_EVERY, CheckpointError, simulated_time
+from ..engine.memory import check_memory
 from ..engine.simulate import run as run_model
 from ..model.config import ConfigError, load_config
 from ..results.io import write_dataset
@@ -31,12 +32,23 @@ def run(
         "from it (bit for bit). Removed once the run has finished and its result is written.")] = None,
     checkpoint_every: Annotated[float, typer.Option(
         "--checkpoint-every", min=0.0, help="Wall-clock seconds between checkpoints (0: after every chunk).")] = CHECKPOINT_EVERY,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the config (and that the run fits in memory), print "
+                                          "it, and stop: nothing is run or written.")] = False,
 ) -> None:
     """Run one realisation of the model and report mu_star with its standard error."""
     try:
         cfg = load_config(config, set_)
+        if dry_run:
+            need = check_memory([cfg])
     except ConfigError as e:
         fail(str(e))
+    if dry_run:
+        length = f"t_total = {cfg.t_total:g} s" if cfg.t_total is not None else f"automatic length, at most {cfg.t_max:g} s"
+        out.print(f"valid config: N = {cfg.N}, {cfg.n_contacts} contacts, {length}, dt = {cfg.dt:g} s; about "
+                  f"{need / 2**20:,.0f} MiB of memory. Dry run: nothing run or written.", markup=False, highlight=False,
+                  soft_wrap=True)
+        sys.stdout.write(cfg.to_toml())
+        return
     if checkpoint is not None and checkpoint.exists():
         err.print(f"resuming from checkpoint {checkpoint} (t = {simulated_time(checkpoint):.6g} s simulated)",
                   markup=False, highlight=False, soft_wrap=True)

@@ -28,8 +28,13 @@ def sweep(
     checkpoint_every: Annotated[float, typer.Option(
         "--checkpoint-every", min=0.0, help="Wall-clock seconds between checkpoints of a running task, in STORE/checkpoints "
         "(a killed task resumes from its checkpoint).")] = SWEEP_CHECKPOINT_EVERY,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the sweep file and the store, say what would run, "
+                                          "and stop: nothing is computed or written.")] = False,
 ) -> None:
     """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
+    if dry_run:
+        _dry_run(definition, store)
+        return
     try:
         report = run_sweep(load_sweep_definition(definition), store, scheduler=scheduler, n_workers=workers,
                            progress=progress, backend=backend, batch_size=batch_size, checkpoint_every=checkpoint_every)
@@ -37,6 +42,23 @@ def sweep(
         fail(str(e))
     print_sweep_report(report)
     raise typer.Exit(sweep_exit(report))
+
+
+def _dry_run(definition: Path, store: Path) -> None:
+    from ..engine.memory import estimate_bytes
+    from ..sweeps.store import Store
+
+    try:
+        sw = load_sweep_definition(definition)
+        st = Store.open(store, sw, create=False)
+    except SweepError as e:
+        fail(str(e))
+    done = st.completed_ids()
+    largest = max(sw.members, key=lambda m: estimate_bytes(m.config))
+    out.print(f"sweep {sw.name!r}: {len(sw.members)} members over {', '.join(sw.dims) or 'no dimension'}; "
+              f"{sum(m.id in done for m in sw.members)} already in {store}, {len(st.pending())} would run. "
+              f"Largest member: {largest.label()}, about {estimate_bytes(largest.config) / 2**20:,.0f} MiB. "
+              "Dry run: nothing computed or written.", markup=False, highlight=False, soft_wrap=True)
 
 
 def print_sweep_report(report: SweepReport, console: Console | None = None) -> None:

@@ -114,6 +114,9 @@ class Config(BaseModel):
             )
         if self.output_interval < self.dt:
             raise ValueError(_message("output_interval", self.output_interval, f"at least dt = {self.dt:g}"))
+        if abs(math.log10(self.v0)) + self.delta > 290:  # v* = v0*10**(+-delta) must be ordinary floats
+            raise ValueError(_message("delta", self.delta, f"v0*10**-delta and v0*10**delta between 1e-290 and 1e290 "
+                                      f"m/s (v0 = {self.v0:g})"))
         dt_max = self.dt_unique_root_limit
         if self.dt >= dt_max:
             raise ValueError(

@@ -1,8 +1,10 @@
 """Writing and reading result files atomically: Datasets (NetCDF via h5netcdf), text, figures.
 
-A file is written to a temporary name beside its destination and moved into place with
-``os.replace`` (:func:`atomic_write`), so an interrupted write never leaves a half-written
-result under the final name, and never replaces a finished one with a broken one.
+A file is written to a temporary name beside its destination, flushed to the disk
+(``os.fsync``) and moved into place with ``os.replace`` (:func:`atomic_write`), so an
+interrupted write never leaves a half-written result under the final name, and never replaces a
+finished one with a broken one; the rename itself is flushed too (the directory is synced), so a
+power cut after a member was reported stored does not take it back.
 """
 
 from __future__ import annotations
@@ -26,9 +28,25 @@ def atomic_write(path: str | os.PathLike) -> Iterator[Path]:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         yield tmp
+        _fsync(tmp)
         os.replace(tmp, path)
+        _fsync(path.parent)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def _fsync(path: Path) -> None:
+    """Flush a file's (or a directory's entries') data to the disk; a no-op where the OS cannot."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:  # e.g. a file system without fsync for directories
+        pass
+    finally:
+        os.close(fd)
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> Path:

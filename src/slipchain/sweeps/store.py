@@ -72,11 +72,12 @@ class Store:
 
     # --- opening -------------------------------------------------------------------------
     @classmethod
-    def open(cls, path: str | os.PathLike, sweep: SweepDefinition | None = None) -> "Store":
+    def open(cls, path: str | os.PathLike, sweep: SweepDefinition | None = None, *, create: bool = True) -> "Store":
         """Open the store at ``path``; with ``sweep``, create it if needed and check it matches.
 
         Refuses (SweepError) a directory that holds something else, and a store written by a
-        different sweep definition, naming what differs.
+        different sweep definition, naming what differs. ``create=False``: the same checks, but a
+        new store is not written (a dry run).
         """
         path = Path(path)
         definition = path / DEFINITION
@@ -95,6 +96,8 @@ class Store:
         if path.exists() and (not path.is_dir() or any(path.iterdir())):
             raise SweepError(f"{str(path)!r} exists and is not a slipchain sweep store (no {DEFINITION}); "
                              "give a new or empty directory as --store")
+        if not create:
+            return cls(path, sweep)
         (path / MEMBERS).mkdir(parents=True, exist_ok=True)
         (path / FAILED).mkdir(exist_ok=True)
         write_text_atomic(definition, f"# slipchain sweep store; digest {sweep.digest}\n" + sweep.to_toml())
