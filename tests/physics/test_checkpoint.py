@@ -92,12 +92,17 @@ def test_batch_of_rows_with_different_lengths_resumes_bit_for_bit(tmp_path, monk
         _same(a, b)
 
 
-def test_checkpoint_of_another_run_or_unreadable_is_refused(tmp_path, monkeypatch):
-    path = tmp_path / "c.nc"
+def _checkpoint_of_a_crashed_run(path, monkeypatch) -> None:
+    """Leave at ``path`` the checkpoint of a small run (N = 21, t_total = 2 ms) that crashed after its first save."""
     with monkeypatch.context() as m:
         _crash_after(m, 1)
         with pytest.raises(Crash):
             run(dict(N=21, t_total=2e-3), checkpoint=path, checkpoint_every=0)
+
+
+def test_checkpoint_of_another_run_or_unreadable_is_refused(tmp_path, monkeypatch):
+    path = tmp_path / "c.nc"
+    _checkpoint_of_a_crashed_run(path, monkeypatch)
     with pytest.raises(ckpt.CheckpointError, match=r"belongs to another run .*seed"):
         run(dict(N=21, t_total=2e-3, seed=9), checkpoint=path)
     path.write_bytes(path.read_bytes()[:1000])  # truncated: a full disk, a partial copy
@@ -137,10 +142,7 @@ def test_cli_run_killed_with_sigkill_resumes_bit_for_bit(tmp_path):
 
 def test_cli_refuses_another_runs_checkpoint_with_exit_2_and_writes_nothing(tmp_path, monkeypatch):
     ckp = tmp_path / "run.ckpt"
-    with monkeypatch.context() as m:
-        _crash_after(m, 1)
-        with pytest.raises(Crash):
-            run(dict(N=21, t_total=2e-3), checkpoint=ckp, checkpoint_every=0)
+    _checkpoint_of_a_crashed_run(ckp, monkeypatch)
     before = ckp.read_bytes()
     out = tmp_path / "out.nc"
     proc = subprocess.run([sys.executable, "-m", "slipchain", "run", "--set", "N=21", "--set", "t_total=4e-3",
