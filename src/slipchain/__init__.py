@@ -3,8 +3,7 @@
 
 Data flow, one way: config -> system (``model``) -> simulation (``engine``: compiled kernel in
 chunks) -> observables and the run Dataset (``results``) -> store (``sweeps``) -> analysis ->
-plots; ``workflows`` chain them into jobs and ``cli`` exposes them. See the README's
-architecture section.
+plots; ``workflows`` chain them into jobs and ``cli`` exposes them. See docs/architecture.md.
 """
 
 from . import _moved

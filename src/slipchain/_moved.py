@@ -1,6 +1,6 @@
 """Old import paths (slipchain 0.1's flat modules) that still work, with one DeprecationWarning each.
 
-0.2 arranged the package in subpackages (README, "Architecture"; CHANGELOG.md). ``import
+0.2 arranged the package in subpackages (docs/architecture.md; CHANGELOG.md). ``import
 slipchain.store`` and ``from slipchain.sweep import make_sweep`` keep working through the table
 below: the old name is an alias of the new module. Names that moved between modules are listed
 in the CHANGELOG.

@@ -1,7 +1,7 @@
 """The package keeps its shape: imports run one way between subpackages, and no module cycle exists.
 
 Every ``import``/``from ... import`` in src/slipchain (top level or inside functions) is parsed
-with ``ast``. A subpackage may import only the subpackages listed in ALLOWED (README,
+with ``ast``. A subpackage may import only the subpackages listed in ALLOWED (docs/architecture.md,
 "Architecture"); the package root (``slipchain/__init__``, the public API) may import anything,
 and nothing inside may import it. The module graph must have no cycle.
 """
@@ -80,7 +80,7 @@ def _layer(module: str) -> str:
 def test_every_subpackage_is_in_the_layer_table_and_has_a_docstring():
     for p in SRC.iterdir():
         if p.is_dir() and (p / "__init__.py").exists():
-            assert p.name in ALLOWED, f"subpackage {p.name} is missing from ALLOWED (and the README's architecture)"
+            assert p.name in ALLOWED, f"subpackage {p.name} is missing from ALLOWED (and docs/architecture.md)"
             doc = ast.get_docstring(ast.parse((p / "__init__.py").read_text()))
             assert doc and "\n" not in doc.split("\n\n")[0], f"{p.name}/__init__.py needs a one-line summary docstring"
 

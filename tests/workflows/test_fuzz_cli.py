@@ -31,7 +31,7 @@ from slipchain.model.config import Config, ConfigError, load_config, make_config
 from slipchain.sweeps.definition import SweepError, load_sweep_definition
 from slipchain.tester.inputs import OPTIONAL_RUN_COLUMNS, RUN_COLUMNS, TRACE_COLUMNS
 
-EXAMPLES = int(os.environ.get("SLIPCHAIN_FUZZ_EXAMPLES", "60"))  # more for a long hunt (600 were run, see README)
+EXAMPLES = int(os.environ.get("SLIPCHAIN_FUZZ_EXAMPLES", "60"))  # more for a long hunt (600 were run, see docs/reliability.md)
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 runner = CliRunner()
 

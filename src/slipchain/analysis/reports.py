@@ -1,7 +1,7 @@
 """Reports in Markdown: the Fig. 6 reproduction report, the mechanism summary, the epsilon table.
 
-Each function takes Datasets (and the numbers computed in :mod:`.fig6`, :mod:`.mechanism`,
-:mod:`.statistics`) and returns text; writing it is the caller's job.
+Each function takes Datasets (and the numbers computed in :mod:`slipchain.analysis.fig6`, :mod:`slipchain.analysis.mechanism`,
+:mod:`slipchain.analysis.statistics`) and returns text; writing it is the caller's job.
 """
 
 from __future__ import annotations

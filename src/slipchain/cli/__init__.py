@@ -12,6 +12,8 @@ their messages); 2 rejected input (nothing written); 130 interrupted (finished w
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import typer
 
 from .common import EXIT_CODES, show_warnings
@@ -24,8 +26,19 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="The two-chain multi-contact friction model of Braun et al., EPL 113, 56002 (2016).")
 
 
+def _version(value: bool) -> None:
+    if value:
+        from .._version import __version__
+
+        typer.echo(f"slipchain {__version__}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _main() -> None:
+def _main(
+    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
     """slipchain: simulate, sweep and plot the multi-contact friction model."""
     show_warnings()
 

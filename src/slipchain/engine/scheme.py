@@ -19,8 +19,7 @@ Scheme (one step n -> n+1, dt):
  1. All spring, drive and inter-block damping forces from (x^n, X^n, u^n, U^n, t^n).
  2. Velocities: U^{n+1} = U^n + dt F/(N_L m); IL blocks without a contact likewise.
  3. IL blocks with a contact: backward Euler in the contact force alone, a scalar equation
-        m u + dt f(u, v*) = r,    r = m u^n + dt F_i,
-    solved by Newton's method in y = log10(|u|/v*), warm-started from the previous step: two
+    ``m u + dt f(u, v*) = r``, ``r = m u^n + dt F_i``, solved by Newton's method in y = log10(|u|/v*), warm-started from the previous step: two
     branch-free, vectorised steps for all contacts (the CPU's ``newton_pass``), accepted when the second
     is below NEWTON_TOL = 1e-5
     decades (error left < 3e-10 decades); the others continue in :func:`solve_contact`, whose

@@ -2,8 +2,7 @@
 
 Energy balance: the stored energy E = kinetic + elastic (all springs, drive springs included)
 changes by the work of the drive point minus what damping and contacts dissipate,
-    E(t) - E(0) = W_drive + W_damping + W_contacts     (the last two are negative).
-The scheme is first order, so the balance holds to O(dt) relative to the stored energy; over a
+``E(t) - E(0) = W_drive + W_damping + W_contacts`` (the last two are negative). The scheme is first order, so the balance holds to O(dt) relative to the stored energy; over a
 long run it is a small fraction of the drive work. Tolerance: ENERGY_RTOL of W_drive.
 
 Displacement: in steady sliding the mean interface-layer velocity over the steady window

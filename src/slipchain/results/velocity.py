@@ -1,7 +1,7 @@
 """Steady sliding velocity from a distance trace, with its uncertainty; runaway detection.
 
-The slider starts from rest and accelerates until the friction force mu(v)*M*g balances the
-hanging weight M'*g (Fig. 1 of the paper). On the rising branch of mu(v) it then slides at a
+The slider starts from rest and accelerates until the friction force ``mu(v)*M*g`` balances the
+hanging weight ``M'*g`` (Fig. 1 of the paper). On the rising branch of mu(v) it then slides at a
 steady velocity; above the first maximum of mu(v) no balance exists and it keeps accelerating
 (``runaway``): the set-up only measures the rising branch.
 

@@ -1,11 +1,11 @@
 """Synthetic friction-tester data: the dead-weight set-up simulated, for examples and tests only.
 
-The slider (mass M on the nominal area A0, pressure p0 = M*g/A0) is pulled by a string over a
-pulley by a hanging mass M'. Both move together:
+The slider (mass M on the nominal area A0, pressure ``p0 = M*g/A0``) is pulled by a string over a
+pulley by a hanging mass M'. Both move together::
 
     (M + M') dv/dt = M'*g - mu(v, p0)*M*g,     dx/dt = v,     x(0) = v(0) = 0,
 
-integrated with scipy's LSODA (stiff at low velocity, where mu(v) is steep). The planted law is
+integrated with scipy's LSODA (stiff at low velocity, where mu(v) is steep). The planted law is::
 
     mu(v, p0) = mu0 * exp(-c*xi**2) * [1 - s*(p0/p_ref - 1)*L(xi)],   xi = log10(v/v_peak),
     L(xi) = 1/(1 + exp(-(xi - xi_step)/w)),
