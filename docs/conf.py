@@ -27,6 +27,7 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax 3 copied into the site: equations render without network
     "sphinx.ext.viewcode",
     "sphinx_gallery.gen_gallery",
 ]
@@ -54,6 +55,7 @@ sphinx_gallery_conf = {
     "download_all_examples": False,
     "remove_config_comments": True,
     "within_subsection_order": "FileNameSortKey",
+    "capture_repr": (),  # show what the examples print, not the repr of their last expression
 }
 
 html_theme = "pydata_sphinx_theme"

@@ -36,7 +36,7 @@ def test_the_site_builds_without_warnings_with_its_gallery_and_internal_links(tm
     html = _sphinx("html", src, tmp_path / "html")
     assert html.returncode == 0, html.stderr[-5000:]
     out = tmp_path / "html"
-    pages = ["index", "getting-started", "guide/runs", "guide/sweeps", "guide/output", "guide/mechanism",
+    pages = ["index", "getting-started", "guide/index", "science", "reference", "guide/runs", "guide/sweeps", "guide/output", "guide/mechanism",
              "guide/tester", "guide/gpu", "model", "numerics", "results", "performance", "reliability", "api",
              "architecture", "changelog", "fig6-paper/report", "auto_examples/index"]
     for page in pages:
@@ -48,7 +48,9 @@ def test_the_site_builds_without_warnings_with_its_gallery_and_internal_links(tm
         assert list((out / "_images").glob(f"sphx_glr_{stem}_*.png")), f"{stem} drew no figure"
     api = (out / "api.html").read_text()
     assert "slipchain.run" in api and "slipchain.sweeps" in api
-    assert "$" not in re.sub(r"<script.*?</script>", "", (out / "model.html").read_text(), flags=re.S)  # math rendered
+    model = (out / "model.html").read_text()
+    assert "$" not in re.sub(r"<script.*?</script>", "", model, flags=re.S)  # math handed to MathJax
+    assert 'src="_static/mathjax/tex-chtml.js"' in model and (out / "_static" / "mathjax" / "tex-chtml.js").exists()
     links = _sphinx("linkcheck", src, tmp_path / "linkcheck")
     assert links.returncode == 0, (links.stdout + links.stderr)[-5000:]
     report = (tmp_path / "linkcheck" / "output.txt").read_text()
