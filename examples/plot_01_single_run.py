@@ -5,7 +5,7 @@ A single run and its driving force
 One realisation of the two-chain model (N = 101 blocks, theta = 0.3 of them with a contact),
 started in steady sliding and run until the standard error of mu_star is below 1 %. The driving
 force per block, f_d(t) = K_d (v_d t - <X>), fluctuates around its mean as contacts stick and slip;
-its steady mean, divided by epsilon f0 theta, is mu_star (MODEL.md, "Start and measurement").
+its steady mean, divided by epsilon f0 theta, is mu_star (see "Drive, start and measurement" on the model page).
 """
 
 import matplotlib.pyplot as plt
