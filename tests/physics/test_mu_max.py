@@ -1,0 +1,43 @@
+"""mu_max under a dead weight by bisection (issue 14, first part), against the analytic maximum."""
+
+import pytest
+
+from slipchain import make_config
+from slipchain.model.config import ConfigError
+from slipchain.workflows.dead_weight import TOL, evaluate, mu_max, single_contact_maximum
+
+# Identical contacts (delta = 0) on every block (theta = 1): every block slides at the u that
+# solves f(u, v0) = mu_a epsilon f0, which exists on the rising branch up to the law's first
+# maximum: the analytic mu_max.
+IDENTICAL = dict(N=11, theta=1.0, delta=0.0, start="steady", t_total=5e-3)
+
+
+def test_bisection_finds_the_analytic_single_contact_maximum():
+    cfg = make_config(**IDENTICAL)
+    f_max, u_peak = single_contact_maximum(cfg)
+    # eq. (1) at u = v0 is epsilon f0 + m eta_c v0; the viscous term moves the peak only slightly
+    assert f_max == pytest.approx(1.0 + cfg.m * cfg.eta_c * cfg.v0 / (cfg.epsilon * cfg.f0), abs=1e-6)
+    assert u_peak == pytest.approx(cfg.v0, rel=1e-2)
+    got = mu_max(cfg, lo=0.5, hi=1.5, tol=TOL)
+    assert got.status == "ok" and got.hi - got.lo <= 2 * TOL
+    assert abs(got.mu_max - f_max) <= TOL  # the issue's resolution
+    assert got.lo <= f_max and got.hi >= f_max - 2 * TOL  # the bracket reaches to the edge
+    # v_max: the steady velocity at lo solves f(v, v0) = lo on the rising branch (below v0)
+    law = cfg.contact_law
+    f_at_v = law.force(got.v_max, cfg.v0) / (cfg.epsilon * cfg.f0)
+    assert got.v_max < cfg.v0 and f_at_v == pytest.approx(got.lo, abs=2e-3)
+    assert [e.velocity_status for e in got.evaluations[:2]] == ["ok", "runaway"]
+    # Away from the peak the classification is the analytic one: steady 2 TOL below, runaway TOL above.
+    # (Within a few 1e-4 of the peak a finite run calls steady points runaway: see the module docstring.)
+    assert evaluate(cfg, f_max - 2 * TOL).velocity_status == "ok"
+    assert evaluate(cfg, f_max + TOL).velocity_status == "runaway"
+
+
+def test_a_bad_bracket_is_a_clear_error():
+    cfg = make_config(**IDENTICAL)
+    with pytest.raises(ConfigError, match="hi = 0.9 must run away"):
+        mu_max(cfg, lo=0.5, hi=0.9)
+    with pytest.raises(ConfigError, match="lo = 1.2 must give steady sliding"):
+        mu_max(cfg, lo=1.2, hi=1.5)
+    with pytest.raises(ConfigError, match="0 < lo < hi"):
+        mu_max(cfg, lo=1.0, hi=0.5)
