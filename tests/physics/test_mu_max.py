@@ -41,3 +41,32 @@ def test_a_bad_bracket_is_a_clear_error():
         mu_max(cfg, lo=1.2, hi=1.5)
     with pytest.raises(ConfigError, match="0 < lo < hi"):
         mu_max(cfg, lo=1.0, hi=0.5)
+
+
+def test_many_bisections_on_dask_equal_serial_ones_and_resume_from_their_cache(tmp_path):
+    from distributed import Client, LocalCluster
+
+    from slipchain.workflows.dead_weight import mu_max_many
+
+    configs = [make_config(**IDENTICAL), make_config(**{**IDENTICAL, "theta": 0.5, "seed": 1})]
+    serial = [mu_max(c, lo=0.5, hi=1.5) for c in configs]
+    cache = tmp_path / "cache"
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=":0") as cluster, Client(cluster) as client:
+        many = mu_max_many(configs, lo=0.5, hi=1.5, cache=cache, client=client)
+    for a, b in zip(serial, many):  # the same runs on workers: the same numbers, bit for bit
+        assert (a.status, a.mu_max, a.lo, a.hi, a.v_max) == (b.status, b.mu_max, b.lo, b.hi, b.v_max)
+        assert [(e.mu_a, e.velocity_status) for e in a.evaluations] == [(e.mu_a, e.velocity_status) for e in b.evaluations]
+    files = sorted(cache.glob("*.json"))
+    assert len(files) == sum(len(r.evaluations) for r in many)
+    # Resumed with every evaluation cached: nothing is computed (a client that cannot compute is not asked)...
+    again = mu_max_many(configs, lo=0.5, hi=1.5, cache=cache, client=object())
+    assert [(r.mu_max, r.lo, r.hi) for r in again] == [(r.mu_max, r.lo, r.hi) for r in many]
+    # ...and after a kill that cut one file and lost another, those runs are redone: the same results, the cache whole.
+    files[0].write_text('{"mu_a": 0.5, "veloc')
+    files[1].unlink()
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=":0") as cluster, Client(cluster) as client:
+        resumed = mu_max_many(configs, lo=0.5, hi=1.5, cache=cache, client=client)
+    assert [(r.mu_max, r.lo, r.hi) for r in resumed] == [(r.mu_max, r.lo, r.hi) for r in many]
+    assert sorted(cache.glob("*.json")) == files
