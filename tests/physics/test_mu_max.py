@@ -4,7 +4,7 @@ import pytest
 
 from slipchain import make_config
 from slipchain.model.config import ConfigError
-from slipchain.workflows.dead_weight import TOL, evaluate, mu_max, single_contact_maximum
+from slipchain.workflows.dead_weight import TOL, BracketError, evaluate, mu_max, single_contact_maximum
 
 # Identical contacts (delta = 0) on every block (theta = 1): every block slides at the u that
 # solves f(u, v0) = mu_a epsilon f0, which exists on the rising branch up to the law's first
@@ -35,9 +35,9 @@ def test_bisection_finds_the_analytic_single_contact_maximum():
 
 def test_a_bad_bracket_is_a_clear_error():
     cfg = make_config(**IDENTICAL)
-    with pytest.raises(ConfigError, match="hi = 0.9 must run away"):
+    with pytest.raises(BracketError, match="hi = 0.9 must run away"):
         mu_max(cfg, lo=0.5, hi=0.9)
-    with pytest.raises(ConfigError, match="lo = 1.2 must give steady sliding"):
+    with pytest.raises(BracketError, match="lo = 1.2 must give steady sliding"):
         mu_max(cfg, lo=1.2, hi=1.5)
     with pytest.raises(ConfigError, match="0 < lo < hi"):
         mu_max(cfg, lo=1.0, hi=0.5)
@@ -70,3 +70,26 @@ def test_many_bisections_on_dask_equal_serial_ones_and_resume_from_their_cache(t
         resumed = mu_max_many(configs, lo=0.5, hi=1.5, cache=cache, client=client)
     assert [(r.mu_max, r.lo, r.hi) for r in resumed] == [(r.mu_max, r.lo, r.hi) for r in many]
     assert sorted(cache.glob("*.json")) == files
+
+
+def test_cli_mu_max_writes_the_table_and_refuses_bad_input_with_exit_2(tmp_path):
+    import subprocess
+    import sys
+
+    import pandas as pd
+
+    base = ["--set", "N=11", "--set", "delta=0", "--set", "start=steady", "--set", "t_total=5e-3"]
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "slipchain", "mu-max", *base, "--theta", "1", "--seeds", "2",
+                        "--lo", "0.5", "--workers", "1", "--out", str(out)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    table, summary = pd.read_csv(out / "mu_max.csv"), pd.read_csv(out / "mu_max_summary.csv")
+    cfg = make_config(**IDENTICAL)
+    assert list(table["seed"]) == [0, 1] and (table["status"] == "ok").all()
+    assert (abs(table["mu_max"] - single_contact_maximum(cfg)[0]) <= TOL).all()
+    assert summary["seeds"].tolist() == [2] and summary["ratio_to_theta_min"].tolist() == [1.0]
+    for bad, words in ((["--theta", "1.5"], "theta"), (["--set", "t_total=0"], "t_total")):
+        rej = subprocess.run([sys.executable, "-m", "slipchain", "mu-max", *base, *bad, "--out", str(tmp_path / "x")],
+                             capture_output=True, text=True, timeout=120)
+        assert rej.returncode == 2 and rej.stderr.startswith("error:") and words in rej.stderr, rej.stderr
+        assert not (tmp_path / "x").exists()

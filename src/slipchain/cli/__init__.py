@@ -17,6 +17,7 @@ from typing import Annotated
 import typer
 
 from .common import EXIT_CODES, show_warnings
+from .dead_weight import mu_max
 from .figure import figure_app
 from .run import run
 from .sweep import mechanism, print_sweep_report, reproduce, sweep
@@ -49,6 +50,7 @@ app.add_typer(figure_app, name="figure")
 app.command()(mechanism)
 app.add_typer(tester_app, name="tester")
 app.command()(reproduce)
+app.command("mu-max")(mu_max)
 
 
 def main() -> None:  # pragma: no cover - console entry point

@@ -34,7 +34,7 @@ import json
 import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 
@@ -45,7 +45,14 @@ from ..results.io import write_text_atomic
 from ..results.velocity import VelocityStatus
 from ..sweeps.definition import member_id
 
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
 TOL = 0.005  # the issue's resolution of mu_max
+
+
+class BracketError(ValueError):
+    """The runs at ``lo`` or ``hi`` did not bracket mu_max (found by running them; they are kept in the cache)."""
 
 
 @dataclass
@@ -84,7 +91,7 @@ def mu_max(config: Config | Mapping[str, Any], *, lo: float = 0.3, hi: float = 1
 
     ``config``: the realisation (its ``dead_weight`` is set by the bisection; give ``t_total``
     long enough for the velocity to settle). ``lo`` must give steady sliding and ``hi`` a runaway;
-    ConfigError (naming the key and the value) if they do not.
+    BracketError (naming them and what the runs gave) if they do not; ConfigError if ``lo >= hi``.
     """
     cfg = config if isinstance(config, Config) else make_config(dict(config))
     return _bisect([cfg], lo, hi, tol, lambda jobs: [evaluate(c, m, backend) for c, m in jobs])[0]
@@ -130,11 +137,11 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
     for i in range(n):
         e_lo, e_hi = evals[i]
         if e_lo.velocity_status != VelocityStatus.OK:
-            raise ConfigError(f"mu_max: lo = {lo} must give steady sliding; the run gave {e_lo.velocity_status} "
+            raise BracketError(f"mu_max: lo = {lo} must give steady sliding; the run gave {e_lo.velocity_status} "
                               f"({e_lo.message or 'no message'}) for seed {configs[i].seed}, theta {configs[i].theta}; "
                               "expected a smaller lo or a longer t_total")
         if e_hi.velocity_status != VelocityStatus.RUNAWAY:
-            raise ConfigError(f"mu_max: hi = {hi} must run away; the run gave {e_hi.velocity_status} for seed "
+            raise BracketError(f"mu_max: hi = {hi} must run away; the run gave {e_hi.velocity_status} for seed "
                               f"{configs[i].seed}, theta {configs[i].theta}; expected a larger hi")
     brackets = [[lo, hi, evals[i][0].velocity] for i in range(n)]
     stopped: dict[int, str] = {}
@@ -175,6 +182,40 @@ def _store(folder: Path | None, cfg: Config, e: Evaluation) -> None:
         write_text_atomic(_cache_path(folder, cfg, e.mu_a), json.dumps(asdict(e)) + "\n")
 
 
+def mu_max_table(base: Config, thetas: list[float], seeds: list[int], *, lo: float = 0.3, hi: float = 1.5,
+                 tol: float = TOL, cache: str | os.PathLike | None = None, client: Any = None,
+                 n_workers: int | None = None, backend: str | BackendName = BackendName.CPU) -> "pd.DataFrame":
+    """mu_max and v_max for every (theta, seed) from ``base`` (:func:`mu_max_many`), one row each."""
+    import pandas as pd
+
+    configs = [base.with_updates(theta=float(t), seed=int(s)) for t in thetas for s in seeds]
+    results = mu_max_many(configs, lo=lo, hi=hi, tol=tol, cache=cache, client=client, n_workers=n_workers,
+                          backend=backend)
+    return pd.DataFrame([{"theta": c.theta, "seed": c.seed, "status": r.status, "mu_max": r.mu_max, "lo": r.lo,
+                          "hi": r.hi, "v_max_m_s": r.v_max, "runs": len(r.evaluations)}
+                         for c, r in zip(configs, results)])
+
+
+def mu_max_summary(table: "pd.DataFrame") -> "pd.DataFrame":
+    """Seed mean of mu_max per theta with its standard error (seed scatter; at least the bisection's
+    half-width tol/sqrt(3) per seed when all seeds agree) and mu_max/mu_max(theta_min)."""
+    import pandas as pd
+
+    rows = []
+    for theta, g in table[table["status"] == str(VelocityStatus.OK)].groupby("theta"):
+        n = len(g)
+        half = float(((g["hi"] - g["lo"]) / 2).mean())
+        se = max(float(g["mu_max"].std(ddof=1)) / np.sqrt(n) if n > 1 else 0.0, half / np.sqrt(3 * n))
+        rows.append({"theta": theta, "mu_max": float(g["mu_max"].mean()), "mu_max_se": se, "seeds": n,
+                     "v_max_m_s": float(g["v_max_m_s"].mean())})
+    out = pd.DataFrame(rows)
+    if len(out):
+        ref, ref_se = out["mu_max"].iloc[0], out["mu_max_se"].iloc[0]
+        out["ratio_to_theta_min"] = out["mu_max"] / ref
+        out["ratio_se"] = out["ratio_to_theta_min"] * np.hypot(out["mu_max_se"] / out["mu_max"], ref_se / ref)
+    return out
+
+
 def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float, float]:
     """The first maximum of eq. (1) for one contact with v* = v0, in units of epsilon*f0, and the
     velocity where it lies: the analytic mu_max of identical contacts (delta = 0, theta = 1),
@@ -185,4 +226,5 @@ def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float
     return float(f[i]), float(u[i])
 
 
-__all__ = ["TOL", "Evaluation", "MuMax", "evaluate", "mu_max", "mu_max_many", "single_contact_maximum"]
+__all__ = ["TOL", "BracketError", "Evaluation", "MuMax", "evaluate", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table",
+           "single_contact_maximum"]
