@@ -16,9 +16,10 @@ import io
 import json
 import math
 import os
-import shutil
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Iterator
 
 import pytest
 from hypothesis import HealthCheck, event, given, settings
@@ -149,8 +150,11 @@ def _csv(rows) -> str:
 # --- helpers ----------------------------------------------------------------------------------------
 
 
-def _workdir() -> Path:
-    return Path(tempfile.mkdtemp(prefix="slipchain-fuzz-"))
+@contextmanager
+def _workdir() -> Iterator[Path]:
+    """A fresh directory per example (pytest's tmp_path is one per test, shared by all examples)."""
+    with tempfile.TemporaryDirectory(prefix="slipchain-fuzz-") as d:
+        yield Path(d)
 
 
 def _rejected(result, *created: Path) -> None:
@@ -168,8 +172,7 @@ def _rejected(result, *created: Path) -> None:
 @FUZZ
 @given(mutated_config())
 def test_fuzzed_config_toml_is_run_or_rejected_with_exit_2(d):
-    work = _workdir()
-    try:
+    with _workdir() as work:
         path = work / "c.toml"
         path.write_text(toml_table(d))
         out = work / "run.nc"
@@ -185,8 +188,6 @@ def test_fuzzed_config_toml_is_run_or_rejected_with_exit_2(d):
         assert list(work.iterdir()) == [path]
         event("config accepted")
         _shortened_run_is_a_result(cfg)
-    finally:
-        shutil.rmtree(work)
 
 
 def _shortened_run_is_a_result(cfg: Config) -> None:
@@ -208,8 +209,7 @@ def _shortened_run_is_a_result(cfg: Config) -> None:
 @FUZZ
 @given(mutated_sweep())
 def test_fuzzed_sweep_toml_is_accepted_or_rejected_with_exit_2(text):
-    work = _workdir()
-    try:
+    with _workdir() as work:
         path = work / "s.toml"
         path.write_text(text)
         store = work / "store"
@@ -224,16 +224,13 @@ def test_fuzzed_sweep_toml_is_accepted_or_rejected_with_exit_2(text):
         assert dry.exit_code == 0 and f"{len(sw.members)} members" in dry.output, (dry.output, dry.stderr, dry.exception)
         assert not store.exists()
         event("sweep accepted")
-    finally:
-        shutil.rmtree(work)
 
 
 @settings(max_examples=max(1, EXAMPLES * 2 // 3), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(csv_tables())
 def test_fuzzed_tester_tables_are_analysed_or_rejected_with_exit_2(tables):
     runs_text, traces_text = tables
-    work = _workdir()
-    try:
+    with _workdir() as work:
         runs = work / "runs.csv"
         runs.write_text(runs_text)
         args = ["tester", "analyze", str(runs), "--out", str(work / "out")]
@@ -248,8 +245,6 @@ def test_fuzzed_tester_tables_are_analysed_or_rejected_with_exit_2(tables):
         else:
             assert result.exit_code == 0, (result.exit_code, result.output, result.stderr, result.exception)
             assert (work / "out" / "runs.csv").exists() and (work / "out" / "summary.md").exists()
-    finally:
-        shutil.rmtree(work)
 
 
 def test_the_generators_reach_both_outcomes():

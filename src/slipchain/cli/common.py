@@ -20,10 +20,10 @@ out = Console()
 EXIT_CODES = {Status.COMPLETED: 0, Status.DIVERGED: 1, Status.INTERRUPTED: 130}
 
 
-def fail(message: str) -> NoReturn:
-    """Rejected input: the message on stderr, exit code 2."""
+def fail(message: str, code: int = 2) -> NoReturn:
+    """The message on stderr as one ``error:`` line, then exit ``code`` (2: rejected input)."""
     err.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
-    raise typer.Exit(2)
+    raise typer.Exit(code)
 
 
 def show_warnings() -> None:

@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from ..model.config import ConfigError, load_config
-from .common import BackendName, BackendOpt, WorkersOpt, err, fail, out, wrote
+from .common import BackendName, BackendOpt, WorkersOpt, fail, out, wrote
 
 
 def mu_max(
@@ -40,8 +40,7 @@ def mu_max(
     except ConfigError as e:  # rejected before anything ran: nothing written
         fail(str(e))
     except BracketError as e:  # found by running: the runs are kept in OUT/cache for the next call
-        err.print(f"error: {e}", markup=False, highlight=False, soft_wrap=True)
-        raise typer.Exit(1)
+        fail(str(e), code=1)
     summary = mu_max_summary(table)
     wrote([write_csv(table, out_dir / "mu_max.csv"), write_csv(summary, out_dir / "mu_max_summary.csv")])
     t = Table(title="slipchain mu-max (seed means)")

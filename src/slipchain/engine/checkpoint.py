@@ -37,7 +37,7 @@ import xarray as xr
 
 from .._version import __version__
 from ..model.system import System
-from ..results.io import read_dataset, write_dataset
+from ..results.io import read_attrs, read_dataset, write_dataset
 from ..results.schema import Status
 from . import scheme as S
 from .backends.base import Batch
@@ -123,9 +123,11 @@ class Checkpointer:
         configs = [str(c) for c in np.atleast_1d(ds["config"].values)]
         mine = [s.config.to_toml() for s in systems]
         if configs != mine:
-            which = "the number of runs differs" if len(configs) != len(mine) else \
-                f"row {next(i for i, (p, q) in enumerate(zip(configs, mine)) if p != q)}: " + _first_difference(
-                    next(p for p, q in zip(configs, mine) if p != q), next(q for p, q in zip(configs, mine) if p != q))
+            if len(configs) != len(mine):
+                which = "the number of runs differs"
+            else:
+                row = next(i for i, (p, q) in enumerate(zip(configs, mine)) if p != q)
+                which = f"row {row}: {_first_difference(configs[row], mine[row])}"
             raise CheckpointError(f"checkpoint {str(self.path)!r} belongs to another run ({which}); give another "
                                   "--checkpoint path, or delete it to start over")
         for name in _BATCH_FIELDS:
@@ -213,10 +215,7 @@ def _first_difference(a: str, b: str) -> str:
 def simulated_time(path: str | Path) -> float:
     """The simulated time (s) a checkpoint has reached (for messages)."""
     try:
-        import h5netcdf
-
-        with h5netcdf.File(path, "r") as f:
-            return float(f.attrs["t_simulated"])
+        return float(read_attrs(path)["t_simulated"])
     except Exception:  # noqa: BLE001 - only for a message
         return float("nan")
 

@@ -12,8 +12,9 @@ from __future__ import annotations
 import os
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Iterator
 
+import numpy as np
 import xarray as xr
 
 ENGINE = "h5netcdf"
@@ -61,6 +62,25 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     with atomic_write(path) as tmp:
         ds.to_netcdf(tmp, engine=ENGINE)
     return Path(path)
+
+
+def read_attrs(path: str | os.PathLike) -> dict[str, Any]:
+    """The global attributes of a file written by :func:`write_dataset`, as plain Python values,
+    opening only its header (no variable is read). Raises what h5py raises for a damaged file."""
+    import h5netcdf
+
+    with h5netcdf.File(path, "r") as f:
+        return {k: _plain(v) for k, v in f.attrs.items()}
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, bytes):
+        return v.decode()
+    if isinstance(v, np.ndarray) and v.size == 1:
+        v = v.reshape(()).item()
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
 
 
 def read_dataset(path: str | os.PathLike) -> xr.Dataset:

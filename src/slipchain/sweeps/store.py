@@ -39,12 +39,11 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
 
-import h5netcdf
 import numpy as np
 import xarray as xr
 from filelock import FileLock, Timeout
 
-from ..results.io import read_dataset, write_dataset, write_text_atomic
+from ..results.io import read_attrs, read_dataset, write_dataset, write_text_atomic
 from ..results.schema import SWEEP_VARIABLES, Status
 from .definition import Member, SweepDefinition, SweepError, load_sweep_definition
 
@@ -216,7 +215,7 @@ class Store:
         for path in (self.member_path(member.id), self.failed_path(member.id)):
             if path.exists():
                 try:
-                    return read_attrs(path)
+                    return _header(path)
                 except UnreadableMember as e:
                     return {"status": UNREADABLE, "message": str(e)}
         return None
@@ -231,11 +230,9 @@ class Store:
         """
         moved = []
         for folder in (self.path / MEMBERS, self.path / FAILED):
-            for path in sorted(folder.glob("*.nc")) if folder.is_dir() else []:
-                if path.name.startswith("."):
-                    continue
+            for path in _member_files(folder):
                 try:
-                    attrs = read_attrs(path)
+                    attrs = _header(path)
                     if attrs.get("member_id", path.stem) != path.stem:
                         raise UnreadableMember(f"{path} holds member {attrs['member_id']!r}, not {path.stem!r}")
                 except UnreadableMember as e:
@@ -340,11 +337,10 @@ class UnreadableMember(Exception):
     """A member file that cannot be opened (the message names the file and the reason)."""
 
 
-def read_attrs(path: Path) -> dict[str, Any]:
-    """The global attributes of a NetCDF file, opening only its header; UnreadableMember if it cannot be."""
+def _header(path: Path) -> dict[str, Any]:
+    """A member file's attributes (:func:`slipchain.results.io.read_attrs`); UnreadableMember if it cannot be read."""
     try:
-        with h5netcdf.File(path, "r") as f:
-            return {k: _plain(v) for k, v in f.attrs.items()}
+        return read_attrs(path)
     except Exception as e:  # h5py raises OSError, but also ValueError/KeyError/RuntimeError on odd bytes
         raise UnreadableMember(f"{path.name}: {type(e).__name__}: {e}") from e
 
@@ -357,20 +353,15 @@ def _holder_text(record: Path) -> str:
         return "holder not recorded yet"
 
 
-def _ids_in(folder: Path) -> set[str]:
+def _member_files(folder: Path) -> list[Path]:
+    """The member files of a store folder, in name order (not the temporary files of a write in progress)."""
     if not folder.is_dir():
-        return set()
-    return {p.stem for p in folder.glob("*.nc") if not p.name.startswith(".")}
+        return []
+    return sorted(p for p in folder.glob("*.nc") if not p.name.startswith("."))
 
 
-def _plain(v: Any) -> Any:
-    if isinstance(v, bytes):
-        return v.decode()
-    if isinstance(v, np.ndarray) and v.size == 1:
-        v = v.reshape(()).item()
-    if isinstance(v, np.generic):
-        return v.item()
-    return v
+def _ids_in(folder: Path) -> set[str]:
+    return {p.stem for p in _member_files(folder)}
 
 
 def _difference(a: SweepDefinition, b: SweepDefinition) -> str:
@@ -387,4 +378,4 @@ def _difference(a: SweepDefinition, b: SweepDefinition) -> str:
     return ", ".join(diffs[:6]) or "same values, different package defaults"
 
 
-__all__ = ["ABSENT", "MISSING", "UNREADABLE", "Store", "UnreadableMember", "open_sweep", "read_attrs"]
+__all__ = ["ABSENT", "MISSING", "UNREADABLE", "Store", "UnreadableMember", "open_sweep"]

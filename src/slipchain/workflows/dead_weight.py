@@ -144,7 +144,7 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
             raise BracketError(f"mu_max: hi = {hi} must run away; the run gave {e_hi.velocity_status} for seed "
                               f"{configs[i].seed}, theta {configs[i].theta}; expected a larger hi")
     brackets = [[lo, hi, evals[i][0].velocity] for i in range(n)]
-    stopped: dict[int, str] = {}
+    stopped: set[int] = set()  # an undecided (no-steady) run ended their bisection
     while True:
         open_ = [i for i in range(n) if i not in stopped and brackets[i][1] - brackets[i][0] > 2 * tol]
         if not open_:
@@ -157,8 +157,8 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
             elif e.velocity_status == VelocityStatus.RUNAWAY:
                 brackets[i][1] = mid
             else:
-                stopped[i] = str(VelocityStatus.NO_STEADY)
-    return [MuMax(stopped.get(i, str(VelocityStatus.OK)),
+                stopped.add(i)
+    return [MuMax(str(VelocityStatus.NO_STEADY if i in stopped else VelocityStatus.OK),
                   float("nan") if i in stopped else 0.5 * (brackets[i][0] + brackets[i][1]),
                   brackets[i][2], brackets[i][0], brackets[i][1], evals[i]) for i in range(n)]
 
