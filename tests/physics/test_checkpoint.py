@@ -53,7 +53,11 @@ CASES = {
     "fixed length": dict(N=31, theta=0.5, t_total=2.5e-3, seed=2),
     "automatic length": dict(N=31, theta=0.5, seed=5, sem_target=0.03, t_max=0.02),
     "dead weight": dict(N=31, theta=0.5, t_total=3e-3, dead_weight=0.5, seed=1),
+    # the automatic dead-weight length: 50 one-sample ramp chunks, first decision at t_decide (save 53),
+    # cut after save 60 while it still drifts, on to t_max
+    "dead weight, automatic length": dict(N=31, theta=0.5, dead_weight=0.7, t_decide=2e-3, t_max=0.01, seed=1),
 }
+SAVES = {"dead weight, automatic length": 60}
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -62,7 +66,7 @@ def test_run_crashed_after_a_checkpoint_resumes_bit_for_bit(case, tmp_path, monk
     reference = run(cfg)
     path = tmp_path / "run.ckpt.nc"
     with monkeypatch.context() as m:
-        _crash_after(m, 2)
+        _crash_after(m, SAVES.get(case, 2))
         with pytest.raises(Crash):
             run(cfg, checkpoint=path, checkpoint_every=0)
     assert path.exists()

@@ -1,5 +1,6 @@
 """mu_max under a dead weight by bisection (issue 14, first part), against the analytic maximum."""
 
+import numpy as np
 import pytest
 
 from slipchain import make_config
@@ -93,3 +94,69 @@ def test_cli_mu_max_writes_the_table_and_refuses_bad_input_with_exit_2(tmp_path)
                              capture_output=True, text=True, timeout=120)
         assert rej.returncode == 2 and rej.stderr.startswith("error:") and words in rej.stderr, rej.stderr
         assert not (tmp_path / "x").exists()
+
+
+# The dead-weight automatic length (t_decide): from rest, identical contacts (analytic steady velocity).
+AUTO = dict(N=11, theta=1.0, delta=0.0, start="rest", t_decide=2e-3, t_max=0.05)
+
+
+def _analytic_velocity(cfg, mu_a: float) -> float:
+    from scipy.optimize import brentq
+
+    law = cfg.contact_law
+    return brentq(lambda lv: law.force(10.0**lv, cfg.v0) / (cfg.epsilon * cfg.f0) - mu_a, -12, np.log10(cfg.v0))
+
+
+def test_automatic_dead_weight_length_runs_on_while_the_velocity_drifts():
+    from slipchain import run
+    from slipchain.results.schema import DECIDE_DRIFT
+    from slipchain.results.velocity import steady_velocity
+
+    cfg = make_config(**AUTO, dead_weight=0.7)
+    ds = run(cfg, progress=False)
+    a = ds.attrs
+    t_end = float(a["t_total"])
+    # at t_decide the trace after the ramp still drifted by more than DECIDE_DRIFT: the run went on...
+    t, X = ds["time"].values, ds["X_mean"].values
+    first = (t > 0.25 * cfg.t_decide) & (t <= cfg.t_decide)
+    early = steady_velocity(t[first], X[first])
+    assert not (early.status == "ok" and abs(early.change) <= DECIDE_DRIFT)
+    # ...and stopped, before t_max, at the first chunk where the drift was small enough
+    assert cfg.t_decide < t_end < cfg.t_max and a["velocity_status"] == "ok" and a["status"] == "completed"
+    late = steady_velocity(t[t > 0.25 * cfg.t_decide], X[t > 0.25 * cfg.t_decide])
+    assert late.status == "ok" and abs(late.change) <= DECIDE_DRIFT and late.velocity == a["velocity"]
+    # the steady velocity is the analytic one, f(v, v0) = mu_a epsilon f0, within the allowed drift
+    assert a["velocity"] == pytest.approx(10.0 ** _analytic_velocity(cfg, 0.7), rel=2 * DECIDE_DRIFT)
+    # a runaway beyond the rising branch is decided at t_decide
+    b = run(make_config(**AUTO, dead_weight=1.2), progress=False).attrs
+    assert b["velocity_status"] == "runaway" and b["t_total"] == pytest.approx(cfg.t_decide, abs=6e-4)
+
+
+def test_automatic_dead_weight_length_stops_at_t_max_with_no_steady_and_the_drift():
+    from slipchain import run
+
+    # t_max too short for the transient: the tester alone would call the trace steady (its change is not
+    # significant in so short a record); the automatic length calls it no-steady and says by how much it drifts
+    a = run(make_config(**{**AUTO, "t_max": 2.5e-3}, dead_weight=0.7), progress=False).attrs
+    assert a["t_total"] == pytest.approx(2.5e-3) and a["velocity_status"] == "no-steady"
+    assert "t_max = 2.5 s reached" not in a["message"] and "t_max = 0.0025 s reached" in a["message"]
+    assert "still changes by" in a["velocity_reason"] and np.isnan(a["velocity"])
+
+
+@pytest.mark.parametrize("extra, match", [
+    (dict(t_decide=2e-3), "t_decide.*spring drive"),
+    (dict(t_decide=2e-3, dead_weight=0.5, t_total=0.01), "t_decide.*t_total"),
+    (dict(t_decide=0.5, dead_weight=0.5, t_max=0.25), "t_decide.*less than t_max"),
+    (dict(t_decide=1e-4, dead_weight=0.5), "t_decide.*100 output intervals"),
+])
+def test_t_decide_bad_combinations_are_clear_errors(extra, match):
+    with pytest.raises(ConfigError, match=match):
+        make_config(**{**IDENTICAL, "t_total": None, **extra})
+
+
+def test_t_decide_absent_leaves_member_ids_unchanged():
+    from slipchain.sweeps.definition import member_id
+
+    cfg = make_config(N=31, dead_weight=0.5, t_total=0.01)
+    # the id of this config as 0.2.0 computed it (before t_decide existed): a frozen reference
+    assert member_id(cfg) == "be3a6b1c23568497"

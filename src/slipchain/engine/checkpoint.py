@@ -152,6 +152,9 @@ class Checkpointer:
             lengths = ds[f"rec_chunk_samples_{r}"].values.astype(int)
             cuts = np.cumsum(lengths)[:-1]
             recorder.samples[r] = [s.copy() for s in np.split(samples, cuts)] if lengths.size else []
+            if c.decide is not None:  # its history is the recorded trace of <X>
+                c.decide.X_mean = [samples[:, S.O_XUMEAN].copy()]
+                c.decide.reached = bool(ds["conv_reached"].values[r])
             recorder.contact_sums[r] = [s.copy() for s in ds[f"rec_contact_sums_{r}"].values] if lengths.size else []
             recorder.chunk_starts[r] = [int(v) for v in ds[f"rec_chunk_starts_{r}"].values]
             recorder.n[r] = int(ds["rec_n"].values[r])
@@ -173,7 +176,8 @@ def _to_dataset(systems, batch: Batch, controls: list[RowControl], rec: Recorder
     data["active"] = ("row", np.array([int(c.active) for c in controls], dtype=np.int8))
     data["row_status"] = ("row", np.array([str(c.status.value) for c in controls], dtype=object))
     data["row_message"] = ("row", np.array([c.message for c in controls], dtype=object))
-    data["conv_reached"] = ("row", np.array([int(bool(c.converge and c.converge.reached)) for c in controls], dtype=np.int8))
+    data["conv_reached"] = ("row", np.array([int(bool((c.converge and c.converge.reached) or (c.decide and c.decide.reached)))
+                                             for c in controls], dtype=np.int8))
     data["conv_sem"] = ("row", np.array([c.converge.sem if c.converge else np.nan for c in controls]))
     data["x0_mean"] = ("row", np.asarray(x0, dtype=float))
     data["e0"] = ("row", np.asarray(e0, dtype=float))

@@ -2,8 +2,10 @@
 
 Every row of a batch has a :class:`RowControl`: a length limit in output samples (``t_total``,
 else ``t_max``), optionally :class:`UntilConverged` (the automatic length: stop once mu_star is
-known to ``sem_target``) and optionally :class:`DeadWeightRamp` (the dead-weight force rising over
-the first :data:`~slipchain.model.system.DEAD_WEIGHT_RAMP` of the run). The driver
+known to ``sem_target``) or :class:`UntilDecided` (the dead-weight automatic length: stop once the
+velocity is steady or has left the rising branch), and optionally :class:`DeadWeightRamp` (the
+dead-weight force rising over the first :data:`~slipchain.model.system.DEAD_WEIGHT_RAMP` of the
+run, or of ``t_decide``). The driver
 (:func:`slipchain.engine.driver.drive`) asks them, between compiled chunks, how many samples to
 run next and whether a row is done.
 """
@@ -17,7 +19,8 @@ import numpy as np
 from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import steady_estimate, window_velocity
-from ..results.schema import Status
+from ..results.schema import Status, after_ramp, dead_weight_velocity, velocity_decided
+from ..results.velocity import VelocityStatus
 from . import scheme as S
 
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
@@ -61,6 +64,36 @@ class UntilConverged:
 
 
 @dataclass
+class UntilDecided:
+    """The dead-weight automatic length (config ``t_decide``): from ``t_decide`` on, after every
+    chunk, the velocity after the ramp is classified exactly as at the end of the run
+    (:func:`~slipchain.results.schema.dead_weight_velocity`, the tester's algorithm). The run stops
+    once it is decided (:func:`~slipchain.results.schema.velocity_decided`): steady with a velocity
+    change across the window of at most DECIDE_DRIFT, or a runaway beyond the rising branch (faster
+    than RUNAWAY_FACTOR*v0*10**delta). While the slider still accelerates or slows down it goes on,
+    at most ``t_max``; there a tester's ``ok`` that still drifts becomes ``no-steady``, with the
+    drift in its reason, and an accelerating slider stays ``runaway``."""
+
+    system: System
+    interval: float
+    n_first: int  # samples before the first decision (t_decide)
+    X_mean: list[np.ndarray] = field(default_factory=list)
+    reached: bool = False
+
+    def decided(self, n_done: int, out_row: np.ndarray) -> bool:
+        """Append one chunk's samples; say whether the velocity is decided (``n_done`` samples so far)."""
+        self.X_mean.append(out_row[:, S.O_XUMEAN])
+        if n_done < self.n_first:
+            return False
+        time = (np.arange(n_done) + 1) * self.interval
+        X = np.concatenate(self.X_mean)
+        after = after_ramp(self.system.config, time)
+        status, _, fit = dead_weight_velocity(self.system, time[after], X[after])
+        self.reached = velocity_decided(status, fit)
+        return self.reached
+
+
+@dataclass
 class DeadWeightRamp:
     """The dead-weight force F_b rising linearly, a sample at a time, over the first ``n_ramp``
     samples of the run, then constant."""
@@ -82,6 +115,7 @@ class RowControl:
     limit: int  # samples
     converge: UntilConverged | None = None
     ramp: DeadWeightRamp | None = None
+    decide: UntilDecided | None = None
     n: int = 0  # samples done
     active: bool = True
     status: Status = Status.COMPLETED
@@ -103,6 +137,8 @@ class RowControl:
         self.n += n
         if self.converge is not None and self.converge.converged(out_row):
             self.active = False
+        if self.decide is not None and self.decide.decided(self.n, out_row):
+            self.active = False
         if self.n >= self.limit:
             self.active = False
 
@@ -110,23 +146,30 @@ class RowControl:
         if self.converge is not None and self.status == Status.COMPLETED and not self.converge.reached:
             return (f"t_max = {t_max:g} s reached before the standard error fell below "
                     f"sem_target = {sem_target:g}")
+        if self.decide is not None and self.status == Status.COMPLETED and not self.decide.reached:
+            return f"t_max = {t_max:g} s reached while the dead-weight velocity still drifted (see velocity_reason)"
         return self.message
 
 
 def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     """The control of one realisation from its config: fixed length (``t_total``), automatic
-    (``t_total`` absent: until converged, at most ``t_max``), and the dead-weight ramp (dead-weight
-    runs always have a fixed length, ``t_total`` else ``t_max``; their velocity is measured after)."""
+    (``t_total`` absent: until converged, at most ``t_max``), and the dead-weight ramp. Dead-weight
+    runs have a fixed length (``t_total``, else ``t_max``; ramp over its first DEAD_WEIGHT_RAMP),
+    or with ``t_decide`` the automatic length :class:`UntilDecided` (ramp over
+    DEAD_WEIGHT_RAMP*t_decide); their velocity is measured after the ramp."""
     c = system.config
     limit = max(1, int(round((c.t_total if c.t_total is not None else c.t_max) / interval)))
     dead_weight = c.dead_weight is not None
     auto = c.t_total is None and not dead_weight
+    decide = dead_weight and c.t_decide is not None
+    n_ramp = max(1, int(round(DEAD_WEIGHT_RAMP * (c.t_decide / interval if decide else limit))))
     return RowControl(
         limit=limit,
         converge=UntilConverged(system, x0_mean, interval) if auto else None,
-        ramp=DeadWeightRamp(dead_weight_force(system), max(1, int(round(DEAD_WEIGHT_RAMP * limit)))) if dead_weight else None,
+        ramp=DeadWeightRamp(dead_weight_force(system), n_ramp) if dead_weight else None,
+        decide=UntilDecided(system, interval, max(1, int(round(c.t_decide / interval)))) if decide else None,
     )
 
 
-__all__ = ["CHUNK_TIME", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged",
+__all__ = ["CHUNK_TIME", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
            "row_control"]

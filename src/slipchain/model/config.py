@@ -38,6 +38,7 @@ ALLOWED: dict[str, str] = {
     "dt": "a number > 0 (s)",
     "t_total": "a number > 0 (s), or absent for an automatic run length",
     "t_max": "a number > 0 (s)",
+    "t_decide": "a number > 0 (s), less than t_max, only with dead_weight and without t_total; or absent",
     "sem_target": "a number > 0",
     "output_interval": "a number > 0 (s), at least dt",
     "seed": "an integer >= 0",
@@ -70,6 +71,10 @@ class Config(BaseModel):
 
     Run control: ``dt`` time step; ``t_total`` fixed run length, or None for automatic
     (run until the standard error of mu_star is below ``sem_target``, at most ``t_max``);
+    ``t_decide`` (dead-weight drive only, with ``t_total`` absent): the dead-weight automatic
+    length: the force ramps up over DEAD_WEIGHT_RAMP*t_decide, the velocity is first classified at
+    t_decide, and the run goes on while it still drifts (neither steady nor beyond the rising
+    branch), at most ``t_max`` (:class:`slipchain.engine.control.UntilDecided`);
     ``output_interval`` sampling interval of f_d(t) (each sample is the average over the
     interval); ``seed`` for the disorder. Where a run is executed (CPU or GPU) is not part of the
     config: it is an argument of :func:`slipchain.run` and the CLI's ``--backend``.
@@ -98,6 +103,7 @@ class Config(BaseModel):
     dt: float = Field(2e-8, gt=0)
     t_total: float | None = Field(None, gt=0)
     t_max: float = Field(0.25, gt=0)
+    t_decide: float | None = Field(None, gt=0)
     sem_target: float = Field(0.01, gt=0)
     output_interval: float = Field(1e-5, gt=0)
     seed: int = Field(0, ge=0)
@@ -117,6 +123,18 @@ class Config(BaseModel):
         if abs(math.log10(self.v0)) + self.delta > 290:  # v* = v0*10**(+-delta) must be ordinary floats
             raise ValueError(_message("delta", self.delta, f"v0*10**-delta and v0*10**delta between 1e-290 and 1e290 "
                                       f"m/s (v0 = {self.v0:g})"))
+        if self.t_decide is not None:
+            if self.dead_weight is None:
+                raise ValueError(_message("t_decide", self.t_decide, "absent with the spring drive (it sets the "
+                                          "dead-weight automatic length; give dead_weight = mu_a)"))
+            if self.t_total is not None:
+                raise ValueError(_message("t_decide", self.t_decide, f"absent when t_total = {self.t_total:g} is "
+                                          "given (a fixed length); remove one of them"))
+            if not self.t_decide < self.t_max:
+                raise ValueError(_message("t_decide", self.t_decide, f"less than t_max = {self.t_max:g}"))
+            if self.t_decide < 100 * self.output_interval:
+                raise ValueError(_message("t_decide", self.t_decide, "at least 100 output intervals (the velocity is "
+                                          f"fitted to the samples after the ramp): {100 * self.output_interval:g} s"))
         dt_max = self.dt_unique_root_limit
         if self.dt >= dt_max:
             raise ValueError(

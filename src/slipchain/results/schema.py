@@ -22,7 +22,7 @@ from .._version import __version__
 from ..model.system import DEAD_WEIGHT_RAMP, State, System, dead_weight_force, mu_star_norm
 from .checks import CheckResult, displacement_check, energy_check, stored_energy
 from .observables import SLOW_FRACTION, steady_estimate, window_velocity
-from .velocity import VelocityStatus, steady_velocity
+from .velocity import VelocityFit, VelocityStatus, steady_velocity
 
 
 class Status(StrEnum):
@@ -253,7 +253,7 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
         "W_contacts": rec.works[2],
     }
     if cfg.dead_weight is not None:
-        after = time > DEAD_WEIGHT_RAMP * time[-1] if n else np.zeros(0, bool)
+        after = after_ramp(cfg, time)
         attrs.update(dead_weight_attrs(system, time[after], rec.X_mean[after]))
     for c in checks:
         attrs[f"check_{c.name}"] = c.value
@@ -268,15 +268,18 @@ def _var_attrs(e: Entry) -> dict[str, str]:
     return out
 
 
-def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> dict[str, Any]:
-    """Dead-weight drive: the applied mu_star, and the velocity measured from the slider's position
-    trace <X>(t) after the force ramp, exactly as the friction tester measures it
-    (:func:`slipchain.results.velocity.steady_velocity`).
+def after_ramp(cfg, time: np.ndarray) -> np.ndarray:
+    """The samples after the dead-weight force ramp, where the velocity is measured: after
+    DEAD_WEIGHT_RAMP of the run (fixed length) or of ``t_decide`` (automatic length)."""
+    if not time.size:
+        return np.zeros(0, bool)
+    return time > DEAD_WEIGHT_RAMP * (time[-1] if cfg.t_decide is None else cfg.t_decide)
 
-    ``runaway``: still accelerating at the end, or sliding faster than RUNAWAY_FACTOR*v0*10**delta:
-    above the maximum of mu(v) the model slider does not stop accelerating until the contact
-    damping m*eta_c*u alone balances the load, at about a metre per second (with eta_c = 0 it never
-    stops)."""
+
+def dead_weight_velocity(system: System, time: np.ndarray, X_mean: np.ndarray) -> tuple[str, str, VelocityFit | None]:
+    """The tester's classification of the slider's trace <X>(t) after the ramp (status, reason,
+    fit; :func:`dead_weight_attrs`). A status ``runaway`` with a fit of status ``ok`` is a slider
+    that slides steadily beyond the rising branch."""
     cfg = system.config
     fit = steady_velocity(time, X_mean) if time.size >= 20 else None
     status, reason = (fit.status, fit.reason) if fit else (VelocityStatus.NO_STEADY, "fewer than 20 samples after the ramp")
@@ -286,6 +289,43 @@ def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> d
         reason = (f"runaway: the slider left the rising branch of mu(v) and slides at {fit.velocity:.3g} m/s "
                   f"(> {RUNAWAY_FACTOR:g} v0 10**delta = {v_branch:.3g} m/s), where only the contact damping "
                   "m eta_c u holds it")
+    return str(VelocityStatus(status)), reason, fit
+
+
+DECIDE_DRIFT = 0.02  # dead-weight automatic length: a steady window may change its velocity by at most this
+
+
+def velocity_decided(status: str, fit: VelocityFit | None) -> bool:
+    """The dead-weight automatic length's stop rule (config ``t_decide``): the tester's ``ok`` with
+    a velocity change across the steady window of at most DECIDE_DRIFT (the tester alone accepts
+    any change that is not significant, which a short, noisy record allows), or a slider that
+    slides beyond the rising branch (``runaway`` with a steady fit)."""
+    if fit is None:
+        return False
+    if status == VelocityStatus.OK:
+        return abs(fit.change) <= DECIDE_DRIFT
+    return status == VelocityStatus.RUNAWAY and fit.status == VelocityStatus.OK
+
+
+def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> dict[str, Any]:
+    """Dead-weight drive: the applied mu_star, and the velocity measured from the slider's position
+    trace <X>(t) after the force ramp, exactly as the friction tester measures it
+    (:func:`slipchain.results.velocity.steady_velocity`).
+
+    ``runaway``: still accelerating at the end, or sliding faster than RUNAWAY_FACTOR*v0*10**delta:
+    above the maximum of mu(v) the model slider does not stop accelerating until the contact
+    damping m*eta_c*u alone balances the load, at about a metre per second (with eta_c = 0 it never
+    stops).
+
+    With the automatic length (``t_decide``) a run that reached ``t_max`` undecided
+    (:func:`velocity_decided`) while the tester would call it ``ok`` is ``no-steady``: its velocity
+    still drifted by more than DECIDE_DRIFT across the window (the reason says by how much)."""
+    cfg = system.config
+    status, reason, fit = dead_weight_velocity(system, time, X_mean)
+    if cfg.t_decide is not None and status == VelocityStatus.OK and not velocity_decided(status, fit):
+        status = str(VelocityStatus.NO_STEADY)
+        reason = (f"no steady sliding by t_max = {cfg.t_max:g} s: the velocity still changes by {fit.change:+.1%} "
+                  f"across the best window (automatic length: at most {DECIDE_DRIFT:.0%}); {fit.reason}")
     ok = status == VelocityStatus.OK
     return {
         "drive": "dead-weight",
@@ -294,7 +334,7 @@ def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> d
         "dead_weight_force": dead_weight_force(system),
         "velocity": fit.velocity if ok else np.nan,
         "velocity_sem": fit.sem if ok else np.nan,
-        "velocity_status": VelocityStatus(status).value,
+        "velocity_status": status,
         "velocity_reason": reason,
     }
 
@@ -314,8 +354,8 @@ def summary(ds: xr.Dataset) -> dict[str, Any]:
     return out
 
 
-__all__ = ["RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
-           "Status", "assemble_run", "dead_weight_attrs", "schema_markdown", "summary"]
+__all__ = ["DECIDE_DRIFT", "RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
+           "Status", "after_ramp", "assemble_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
 
 if __name__ == "__main__":  # pragma: no cover - regenerates docs/run-schema.md
     print(schema_markdown(), end="")

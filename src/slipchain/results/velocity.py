@@ -56,6 +56,7 @@ class VelocityFit:
     t_start: float  # start of the steady window, s
     n_points: int  # points in the window
     reason: str
+    change: float = float("nan")  # ok: relative velocity change dv/b across the steady window
 
 
 def _poly_fit(tau: np.ndarray, x: np.ndarray, deg: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -102,7 +103,7 @@ def steady_velocity(t: np.ndarray, x: np.ndarray) -> VelocityFit:
             sem = float(np.hypot(np.sqrt(lcov[1, 1]) * inflate, drift))
             return VelocityFit(OK, float(lin[1]), sem, float(t_k), int(tt.size),
                                f"steady from t = {t_k:.4g} s ({tt.size} points); velocity change over the window "
-                               f"{dv / b:+.1%}")
+                               f"{dv / b:+.1%}", float(dv / b))
     if last is None:
         return VelocityFit(NO_STEADY, float("nan"), float("nan"), float("nan"), 0, "too few points for a window")
     moving, b, dv, se_dv, W = last
