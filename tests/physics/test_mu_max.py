@@ -89,7 +89,8 @@ def test_cli_mu_max_writes_the_table_and_refuses_bad_input_with_exit_2(tmp_path)
     assert list(table["seed"]) == [0, 1] and (table["status"] == "ok").all()
     assert (abs(table["mu_max"] - single_contact_maximum(cfg)[0]) <= TOL).all()
     assert summary["seeds"].tolist() == [2] and summary["ratio_to_theta_min"].tolist() == [1.0]
-    for bad, words in ((["--theta", "1.5"], "theta"), (["--set", "t_total=0"], "t_total")):
+    for bad, words in ((["--theta", "1.5"], "theta"), (["--set", "t_total=0"], "t_total"),
+                       (["--set", "t_total=0.0", "--set", "t_decide=0.0"], "t_")):
         rej = subprocess.run([sys.executable, "-m", "slipchain", "mu-max", *base, *bad, "--out", str(tmp_path / "x")],
                              capture_output=True, text=True, timeout=120)
         assert rej.returncode == 2 and rej.stderr.startswith("error:") and words in rej.stderr, rej.stderr
@@ -119,11 +120,11 @@ def test_automatic_dead_weight_length_runs_on_while_the_velocity_drifts():
     # at t_decide the trace after the ramp still drifted by more than DECIDE_DRIFT: the run went on...
     t, X = ds["time"].values, ds["X_mean"].values
     first = (t > 0.25 * cfg.t_decide) & (t <= cfg.t_decide)
-    early = steady_velocity(t[first], X[first])
+    early = steady_velocity(t[first], X[first], DECIDE_DRIFT)
     assert not (early.status == "ok" and abs(early.change) <= DECIDE_DRIFT)
     # ...and stopped, before t_max, at the first chunk where the drift was small enough
     assert cfg.t_decide < t_end < cfg.t_max and a["velocity_status"] == "ok" and a["status"] == "completed"
-    late = steady_velocity(t[t > 0.25 * cfg.t_decide], X[t > 0.25 * cfg.t_decide])
+    late = steady_velocity(t[t > 0.25 * cfg.t_decide], X[t > 0.25 * cfg.t_decide], DECIDE_DRIFT)
     assert late.status == "ok" and abs(late.change) <= DECIDE_DRIFT and late.velocity == a["velocity"]
     # the steady velocity is the analytic one, f(v, v0) = mu_a epsilon f0, within the allowed drift
     assert a["velocity"] == pytest.approx(10.0 ** _analytic_velocity(cfg, 0.7), rel=2 * DECIDE_DRIFT)
@@ -160,3 +161,49 @@ def test_t_decide_absent_leaves_member_ids_unchanged():
     cfg = make_config(N=31, dead_weight=0.5, t_total=0.01)
     # the id of this config as 0.2.0 computed it (before t_decide existed): a frozen reference
     assert member_id(cfg) == "be3a6b1c23568497"
+
+
+def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_path):
+    """A plan file ([base] + [bisection] with curve points) through `slipchain mu-max`, resumed from
+    its cache, then `slipchain figure mu-max` (a real figure and report) and a bad plan key."""
+    import subprocess
+    import sys
+
+    import pandas as pd
+
+    plan = tmp_path / "plan.toml"
+    plan.write_text('name = "t"\n[base]\nN = 11\ndelta = 0.0\nt_decide = 1e-2\nt_max = 0.1\n'
+                    "[bisection]\ntheta = [1.0]\nseeds = 2\nlo = 0.5\nhi = 1.5\ncurve = [0.3]\n")
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "slipchain", "mu-max", str(plan), "--workers", "1", "--out", str(out)]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    table, evals = pd.read_csv(out / "mu_max.csv"), pd.read_csv(out / "evaluations.csv")
+    f_max = single_contact_maximum(make_config(**IDENTICAL))[0]
+    assert (table["status"] == "ok").all() and (abs(table["mu_max"] - f_max) <= TOL).all()
+    # every bisection run and the curve point, each a cache file; the curve point on the analytic branch
+    assert len(list((out / "cache").glob("*.json"))) == len(evals) == table["runs"].sum() + 1
+    curve = evals[evals["source"] == "curve"].iloc[0]
+    cfg = make_config(**AUTO, dead_weight=0.3)
+    assert curve["velocity_status"] == "ok"
+    assert curve["velocity_m_s"] == pytest.approx(10.0 ** _analytic_velocity(cfg, 0.3), rel=0.1)
+    # (a ramp of 2.5 ms: with 0.5 ms, t_decide = 2e-3, the overshoot runs away below the peak and mu_max is 0.988)
+    # a second call computes nothing (every run cached) and writes the same tables
+    before = (out / "mu_max.csv").read_text()
+    (out / "mu_max.csv").unlink()
+    r2 = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert r2.returncode == 0 and (out / "mu_max.csv").read_text() == before
+    fig = tmp_path / "fig"
+    r3 = subprocess.run([sys.executable, "-m", "slipchain", "figure", "mu-max", "--from", str(out), "--out", str(fig)],
+                        capture_output=True, text=True, timeout=300)
+    assert r3.returncode == 0, r3.stderr
+    assert (fig / "mu_max.png").stat().st_size > 10_000 and (fig / "mu_max.pdf").exists()
+    report = (fig / "report.md").read_text()
+    assert f"{table['mu_max'].mean():.4f}" in report and "| 1 | 2/2 |" in report
+    # failure modes: an unknown plan key, and a result directory that is not one: exit 2, nothing written
+    plan.write_text(plan.read_text().replace("seeds = 2", "seedz = 2"))
+    bad = subprocess.run([*cmd[:-1], str(tmp_path / "y")], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "seedz" in bad.stderr and not (tmp_path / "y").exists()
+    bad = subprocess.run([sys.executable, "-m", "slipchain", "figure", "mu-max", "--from", str(tmp_path),
+                          "--out", str(tmp_path / "z")], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "mu_max_summary.csv" in bad.stderr and not (tmp_path / "z").exists()

@@ -114,3 +114,19 @@ def dead_weight(
         wrote(_figures().dead_weight(store, out_dir))
     except SweepError as e:
         fail(str(e))
+
+
+@figure_app.command("mu-max")
+def mu_max(
+    result: Annotated[Path, typer.Option("--from", help="Output directory of `slipchain mu-max`.")],
+    out_dir: OutOpt,
+    spring: Annotated[Optional[Path], typer.Option("--spring", help="Index CSV of a velocity sweep (e.g. docs/mechanism/velocity-index.csv): the spring-drive maximum beside.")] = None,
+) -> None:
+    """Figs. 2-3 from the model: mu(v) under a dead weight per theta, and mu_max(theta) beside the spring-drive maximum; report.md."""
+    from ..model.config import ConfigError
+    from ..workflows.dead_weight import mu_max_figure
+
+    try:
+        wrote(mu_max_figure(result, out_dir, spring))
+    except ConfigError as e:
+        fail(str(e))

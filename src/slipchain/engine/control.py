@@ -23,6 +23,8 @@ from ..results.schema import Status, after_ramp, dead_weight_velocity, velocity_
 from ..results.velocity import VelocityStatus
 from . import scheme as S
 
+DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace each time it has grown by 2 %
+# (each classification fits the whole trace: checking every chunk would cost as much as the run)
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
 MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
 MIN_STEADY_SLIDE = 1e-6  # ...and a steady window in which the drive has moved at least this far (m):
@@ -66,7 +68,8 @@ class UntilConverged:
 @dataclass
 class UntilDecided:
     """The dead-weight automatic length (config ``t_decide``): from ``t_decide`` on, after every
-    chunk, the velocity after the ramp is classified exactly as at the end of the run
+    chunk that has lengthened the trace by DECIDE_EVERY since the last check, the velocity after
+    the ramp is classified exactly as at the end of the run
     (:func:`~slipchain.results.schema.dead_weight_velocity`, the tester's algorithm). The run stops
     once it is decided (:func:`~slipchain.results.schema.velocity_decided`): steady with a velocity
     change across the window of at most DECIDE_DRIFT, or a runaway beyond the rising branch (faster
@@ -83,7 +86,7 @@ class UntilDecided:
     def decided(self, n_done: int, out_row: np.ndarray) -> bool:
         """Append one chunk's samples; say whether the velocity is decided (``n_done`` samples so far)."""
         self.X_mean.append(out_row[:, S.O_XUMEAN])
-        if n_done < self.n_first:
+        if n_done < self.n_first or self._check_index(n_done) == self._check_index(n_done - out_row.shape[0]):
             return False
         time = (np.arange(n_done) + 1) * self.interval
         X = np.concatenate(self.X_mean)
@@ -91,6 +94,13 @@ class UntilDecided:
         status, _, fit = dead_weight_velocity(self.system, time[after], X[after])
         self.reached = velocity_decided(status, fit)
         return self.reached
+
+    def _check_index(self, n: int) -> int:
+        """Checks fall at n_first*(1 + DECIDE_EVERY)**k: a chunk end checks when it passes the next one
+        (a function of the sample count alone, so a resumed run checks where the uninterrupted one did)."""
+        if n < self.n_first:
+            return -1
+        return int(np.floor(np.log(n / self.n_first) / np.log1p(DECIDE_EVERY) + 1e-12))
 
 
 @dataclass
@@ -171,5 +181,5 @@ def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     )
 
 
-__all__ = ["CHUNK_TIME", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
+__all__ = ["CHUNK_TIME", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
            "row_control"]

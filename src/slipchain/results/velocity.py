@@ -76,8 +76,9 @@ def _lag1(resid: np.ndarray) -> float:
     return float(r[:-1] @ r[1:]) / den if den > 0 else 0.0
 
 
-def steady_velocity(t: np.ndarray, x: np.ndarray) -> VelocityFit:
-    """Find the steady-sliding window of one trace and fit the velocity (see module docstring)."""
+def steady_velocity(t: np.ndarray, x: np.ndarray, rel_tol: float = REL_TOL) -> VelocityFit:
+    """Find the steady-sliding window of one trace and fit the velocity (see module docstring;
+    ``rel_tol`` the small velocity change of step 2, REL_TOL for the tester)."""
     t = np.asarray(t, float)
     x = np.asarray(x, float)
     T = t[-1] - t[0]
@@ -95,7 +96,7 @@ def steady_velocity(t: np.ndarray, x: np.ndarray) -> VelocityFit:
         dv, se_dv = 2 * c * W, 2 * W * np.sqrt(cov[2, 2])
         moving = b > SIGMAS * np.sqrt(cov[1, 1])
         last = (moving, b, dv, se_dv, W)
-        if moving and (abs(dv) <= REL_TOL * b or abs(dv) <= SIGMAS * se_dv):
+        if moving and (abs(dv) <= rel_tol * b or abs(dv) <= SIGMAS * se_dv):
             lin, lcov, resid = _poly_fit(tt - mid, xx, 1)
             rho = _lag1(resid)
             inflate = np.sqrt((1 + rho) / (1 - rho)) if 0 < rho < 1 else 1.0

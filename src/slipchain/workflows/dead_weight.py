@@ -24,14 +24,17 @@ default), and keeps every evaluation in a cache directory (one small JSON file p
 run, named by the run's member id and written atomically), so an interrupted call resumes
 without recomputing what it had finished.
 
-Not yet here (issue 14 continues): an automatic run length that continues while the velocity
-still drifts, the figure and the fit to tester data.
+A :class:`Plan` (``[base]`` and ``[bisection]`` of a TOML file, e.g. ``presets/mu-max.toml``)
+says what ``slipchain mu-max`` runs; :func:`run_plan` runs it and writes its tables. Use the
+automatic dead-weight length (config ``t_decide``, :class:`slipchain.engine.control.UntilDecided`)
+so that slow corners (theta = 0.1) are decided rather than left ``no-steady``.
 """
 
 from __future__ import annotations
 
 import json
 import os
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping
@@ -105,25 +108,37 @@ def mu_max_many(configs: list[Config], *, lo: float = 0.3, hi: float = 1.5, tol:
     (resume after an interruption); ``client``: an existing ``distributed.Client``, else a local
     cluster of ``n_workers`` processes."""
     configs = [c if isinstance(c, Config) else make_config(dict(c)) for c in configs]
-    folder = Path(cache) if cache is not None else None
+    with _client(client, n_workers) as c:
+        return _bisect(configs, lo, hi, tol, lambda jobs: evaluate_many(jobs, cache=cache, client=c, backend=backend))
 
-    def run_all(jobs: list[tuple[Config, float]], c) -> list[Evaluation]:
-        out: list[Evaluation | None] = [_cached(folder, cfg, mu) for cfg, mu in jobs]
-        todo = [i for i, e in enumerate(out) if e is None]
-        if todo:
+
+def evaluate_many(jobs: list[tuple[Config, float]], *, cache: str | os.PathLike | None = None, client: Any = None,
+                  n_workers: int | None = None, backend: str | BackendName = BackendName.CPU) -> list[Evaluation]:
+    """:func:`evaluate` for many (config, mu_a) pairs as Dask tasks; those in ``cache`` are read, not run,
+    and each new one is written there as soon as it is done."""
+    folder = Path(cache) if cache is not None else None
+    out: list[Evaluation | None] = [_cached(folder, cfg, mu) for cfg, mu in jobs]
+    todo = [i for i, e in enumerate(out) if e is None]
+    if todo:
+        with _client(client, n_workers) as c:
             futures = c.map(evaluate, [jobs[i][0] for i in todo], [jobs[i][1] for i in todo],
                             [str(backend)] * len(todo), pure=False)
             for i, fut in zip(todo, futures):
                 out[i] = fut.result()
                 _store(folder, jobs[i][0], out[i])
-        return out  # type: ignore[return-value]
+    return out  # type: ignore[return-value]
 
+
+@contextmanager
+def _client(client: Any, n_workers: int | None):
+    """The given Dask client, else a local cluster for the duration."""
     if client is not None:
-        return _bisect(configs, lo, hi, tol, lambda jobs: run_all(jobs, client))
+        yield client
+        return
     from ..sweeps.executor import dask_client
 
     with dask_client(None, n_workers) as c:
-        return _bisect(configs, lo, hi, tol, lambda jobs: run_all(jobs, c))
+        yield c
 
 
 def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
@@ -186,11 +201,15 @@ def mu_max_table(base: Config, thetas: list[float], seeds: list[int], *, lo: flo
                  tol: float = TOL, cache: str | os.PathLike | None = None, client: Any = None,
                  n_workers: int | None = None, backend: str | BackendName = BackendName.CPU) -> "pd.DataFrame":
     """mu_max and v_max for every (theta, seed) from ``base`` (:func:`mu_max_many`), one row each."""
-    import pandas as pd
-
     configs = [base.with_updates(theta=float(t), seed=int(s)) for t in thetas for s in seeds]
     results = mu_max_many(configs, lo=lo, hi=hi, tol=tol, cache=cache, client=client, n_workers=n_workers,
                           backend=backend)
+    return _table(configs, results)
+
+
+def _table(configs: list[Config], results: list[MuMax]) -> "pd.DataFrame":
+    import pandas as pd
+
     return pd.DataFrame([{"theta": c.theta, "seed": c.seed, "status": r.status, "mu_max": r.mu_max, "lo": r.lo,
                           "hi": r.hi, "v_max_m_s": r.v_max, "runs": len(r.evaluations)}
                          for c, r in zip(configs, results)])
@@ -216,6 +235,158 @@ def mu_max_summary(table: "pd.DataFrame") -> "pd.DataFrame":
     return out
 
 
+def evaluations_table(configs: list[Config], results: list[MuMax]) -> "pd.DataFrame":
+    """Every dead-weight run of the bisections: theta, seed, applied mu_a, status, velocity (m/s)."""
+    import pandas as pd
+
+    return pd.DataFrame([{"theta": c.theta, "seed": c.seed, "mu_a": e.mu_a, "velocity_status": e.velocity_status,
+                          "velocity_m_s": e.velocity, "source": "bisection"}
+                         for c, r in zip(configs, results) for e in r.evaluations])
+
+
+# --- a mu-max plan: the base config and the bisection's settings in one TOML file ------------------
+
+PLAN_KEYS = {"theta": "a list of numbers in (0, 1]", "seeds": "an integer >= 1 (seeds 0..seeds-1)",
+             "lo": "a number > 0 that gives steady sliding", "hi": "a number > lo that runs away",
+             "tol": "a number > 0 (resolution of mu_max)",
+             "curve": "a list of numbers > 0: extra applied mu_a below lo, run at seed 0, for the mu(v) figure"}
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What ``slipchain mu-max`` runs: ``[base]`` (a config; its dead_weight is set by the
+    bisection) and ``[bisection]`` (:data:`PLAN_KEYS`) of a TOML file, e.g. presets/mu-max.toml."""
+
+    base: Config
+    theta: tuple[float, ...] = (0.1, 1.0)
+    seeds: int = 4
+    lo: float = 0.3
+    hi: float = 1.5
+    tol: float = TOL
+    curve: tuple[float, ...] = ()
+    name: str = "mu-max"
+
+    def check(self) -> "Plan":
+        """Every setting valid and every config of the plan valid, before anything runs (ConfigError)."""
+        def bad(key: str, value: Any) -> ConfigError:
+            return ConfigError(f"mu-max key '{key}' has value {value!r}; expected {PLAN_KEYS[key]}")
+
+        if not self.theta:
+            raise bad("theta", list(self.theta))
+        if self.seeds < 1:
+            raise bad("seeds", self.seeds)
+        if not (self.tol > 0 and np.isfinite(self.tol)):
+            raise bad("tol", self.tol)
+        if not (0 < self.lo < self.hi and np.isfinite(self.hi)):
+            raise ConfigError(f"mu-max keys 'lo' and 'hi' have values {self.lo!r} and {self.hi!r}; expected "
+                              "0 < lo < hi (lo steady, hi runaway)")
+        if any(not (0 < m and np.isfinite(m)) for m in self.curve):
+            raise bad("curve", list(self.curve))
+        if self.base.t_total is None and self.base.t_decide is None:
+            raise ConfigError("config keys 't_total' and 't_decide' are both absent; expected the length of each "
+                              "dead-weight run: t_total (fixed, s) or t_decide (automatic, at most t_max), "
+                              "e.g. --set t_decide=0.05")
+        for t in self.theta:
+            self.base.with_updates(theta=float(t))  # ConfigError naming theta
+        return self
+
+    def configs(self) -> list[Config]:
+        return [self.base.with_updates(theta=float(t), seed=int(s)) for t in self.theta for s in range(self.seeds)]
+
+
+def load_plan(path: str | os.PathLike | None, overrides: list[str] = (), **settings: Any) -> Plan:
+    """A :class:`Plan` from a TOML file (``[base]`` and ``[bisection]``; a flat file is a base config
+    alone), ``name=value`` overrides of the base, then explicit ``settings`` (None: not given)."""
+    from ..model.config import parse_override, read_toml
+
+    data = read_toml(path) if path is not None else {}
+    base = dict(data.get("base", data if "bisection" not in data else {}))
+    if "base" in data:
+        extra = sorted(set(data) - {"base", "bisection", "name"})
+        if extra:
+            raise ConfigError(f"mu-max plan {str(path)!r} has unknown table(s)/key(s) {extra}; expected [base], "
+                              "[bisection] and name")
+    bisection = dict(data.get("bisection", {}))
+    unknown = sorted(set(bisection) - set(PLAN_KEYS))
+    if unknown:
+        raise ConfigError(f"mu-max key(s) {unknown} in [bisection] unknown; expected some of {sorted(PLAN_KEYS)}")
+    for item in overrides:
+        key, value = parse_override(item)
+        base[key] = value
+    base.setdefault("dead_weight", 1.0)  # a placeholder: the bisection sets it (t_decide needs a dead weight)
+    for key, value in settings.items():
+        if value is not None:
+            bisection[key] = value
+    try:
+        kw = {k: (tuple(float(x) for x in v) if k in ("theta", "curve") else int(v) if k == "seeds" else float(v))
+              for k, v in bisection.items()}
+    except (TypeError, ValueError) as e:
+        key = next(k for k in bisection if not _convertible(k, bisection[k]))
+        raise ConfigError(f"mu-max key '{key}' has value {bisection[key]!r}; expected {PLAN_KEYS[key]}") from e
+    return Plan(make_config(base), name=str(data.get("name", "mu-max")), **kw).check()
+
+
+def _convertible(key: str, value: Any) -> bool:
+    try:
+        if key in ("theta", "curve"):
+            [float(x) for x in value]
+        elif key == "seeds":
+            if isinstance(value, float) and not value.is_integer():
+                return False
+            int(value)
+        else:
+            float(value)
+        return True
+    except (TypeError, ValueError):
+        return False
+
+
+@dataclass
+class PlanResult:
+    table: "pd.DataFrame"  # one row per (theta, seed): mu_max.csv
+    summary: "pd.DataFrame"  # seed means: mu_max_summary.csv
+    evaluations: "pd.DataFrame"  # every dead-weight run: evaluations.csv
+
+
+def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, n_workers: int | None = None,
+             backend: str | BackendName = BackendName.CPU) -> PlanResult:
+    """Run a plan: the bisections (:func:`mu_max_many`) and the ``curve`` points, every run cached in
+    OUT/cache (a second call resumes), then write mu_max.csv, mu_max_summary.csv, evaluations.csv
+    and plan.toml into ``out`` (each file atomically). BracketError if lo/hi do not bracket."""
+    import pandas as pd
+
+    from .tester import write_csv
+
+    out = Path(out)
+    configs = plan.configs()
+    with _client(client, n_workers) as c:
+        results = mu_max_many(configs, lo=plan.lo, hi=plan.hi, tol=plan.tol, cache=out / "cache", client=c,
+                              backend=backend)
+        curve_jobs = [(plan.base.with_updates(theta=float(t), seed=0), float(m)) for t in plan.theta for m in plan.curve]
+        curve = evaluate_many(curve_jobs, cache=out / "cache", client=c, backend=backend)
+    table = _table(configs, results)
+    evals = pd.concat([evaluations_table(configs, results),
+                       pd.DataFrame([{"theta": cfg.theta, "seed": cfg.seed, "mu_a": e.mu_a,
+                                      "velocity_status": e.velocity_status, "velocity_m_s": e.velocity,
+                                      "source": "curve"} for (cfg, _), e in zip(curve_jobs, curve)],
+                                    columns=["theta", "seed", "mu_a", "velocity_status", "velocity_m_s", "source"])],
+                      ignore_index=True)
+    result = PlanResult(table, mu_max_summary(table), evals)
+    write_csv(result.table, out / "mu_max.csv")
+    write_csv(result.summary, out / "mu_max_summary.csv")
+    write_csv(result.evaluations, out / "evaluations.csv")
+    write_text_atomic(out / "plan.toml", plan_toml(plan))
+    return result
+
+
+def plan_toml(plan: Plan) -> str:
+    """The plan as the TOML file :func:`load_plan` reads (the base config in full)."""
+    lists = lambda xs: "[" + ", ".join(repr(float(x)) for x in xs) + "]"  # noqa: E731
+    base = plan.base.to_toml()
+    return (f'name = "{plan.name}"\n\n[base]\n{base}\n[bisection]\ntheta = {lists(plan.theta)}\nseeds = {plan.seeds}\n'
+            f"lo = {plan.lo!r}\nhi = {plan.hi!r}\ntol = {plan.tol!r}\ncurve = {lists(plan.curve)}\n")
+
+
 def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float, float]:
     """The first maximum of eq. (1) for one contact with v* = v0, in units of epsilon*f0, and the
     velocity where it lies: the analytic mu_max of identical contacts (delta = 0, theta = 1),
@@ -226,5 +397,75 @@ def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float
     return float(f[i]), float(u[i])
 
 
-__all__ = ["TOL", "BracketError", "Evaluation", "MuMax", "evaluate", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table",
-           "single_contact_maximum"]
+__all__ = ["PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "evaluate", "evaluate_many",
+           "evaluations_table", "load_plan", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table", "plan_toml",
+           "run_plan", "single_contact_maximum"]
+
+
+# --- the figure and report of a mu-max result ------------------------------------------------------
+
+def mu_max_figure(result: str | os.PathLike, out: str | os.PathLike,
+                  spring_index: str | os.PathLike | None = None) -> list[Path]:
+    """Figs. 2-3 from the model (:func:`slipchain.plots.dead_weight.plot_mu_max`) and report.md, from
+    a ``slipchain mu-max`` output directory; ``spring_index`` a velocity sweep's index CSV for the
+    spring-drive maximum beside it. ConfigError naming what is missing."""
+    import pandas as pd
+
+    from ..analysis.fit import g
+    from ..model.config import read_toml
+    from ..plots.dead_weight import plot_mu_max, spring_drive_maxima
+
+    folder = Path(result)
+    files = {n: folder / n for n in ("mu_max_summary.csv", "evaluations.csv", "plan.toml", "mu_max.csv")}
+    for name, f in files.items():
+        if not f.is_file():
+            raise ConfigError(f"mu-max result {str(folder)!r} has no {name}; expected the --out directory of "
+                              "`slipchain mu-max`")
+    summary, evals, table = (pd.read_csv(files[n]) for n in ("mu_max_summary.csv", "evaluations.csv", "mu_max.csv"))
+    if summary.empty:
+        raise ConfigError(f"{str(files['mu_max_summary.csv'])!r} has no theta with a decided mu_max; nothing to draw")
+    base = make_config(dict(read_toml(files["plan.toml"]).get("base", {})))
+    v = np.geomspace(base.v0 * 1e-4, base.v0 * 10, 600)
+    branch = (v, g(v, base.v0, base.delta, base.c))
+    try:
+        spring = spring_drive_maxima(spring_index) if spring_index is not None else None
+    except (OSError, ValueError) as e:
+        raise ConfigError(f"--spring {str(spring_index)!r}: {e}") from None
+    paths = plot_mu_max(summary, evals, branch, spring, out)
+    text = mu_max_report(summary, table, spring, base, folder, spring_index)
+    paths.append(write_text_atomic(Path(out) / "report.md", text))
+    return paths
+
+
+def mu_max_report(summary: "pd.DataFrame", table: "pd.DataFrame", spring: "pd.DataFrame | None", base: Config,
+                  folder: Path, spring_index) -> str:
+    """report.md: the numbers behind the figure and what they say."""
+    from ..analysis.fit import g_max
+
+    lines = ["# mu_max(theta) under a dead weight: the model measured as the tester measures", "",
+             f"From `{folder}` (`slipchain mu-max`; N = {base.N}, eta_c = {base.eta_c:g} 1/s, epsilon = {base.epsilon:g}, "
+             f"t_decide = {base.t_decide}, t_max = {base.t_max:g} s). Every contact sliding steadily would give at most "
+             f"g_max = {g_max(base.delta, base.c):.4f} (eq. 1 averaged over v*).", "",
+             "| theta | seeds decided | mu_max (± SE) | ratio to smallest theta | v_max (m/s) |", "|---|---|---|---|---|"]
+    for r in summary.itertuples():
+        n_all = int((table["theta"] == r.theta).sum())
+        lines.append(f"| {r.theta:g} | {r.seeds}/{n_all} | {r.mu_max:.4f} ± {r.mu_max_se:.4f} | "
+                     f"{r.ratio_to_theta_min:.4f} ± {r.ratio_se:.4f} | {r.v_max_m_s:.3g} |")
+    undecided = table[table["status"] != "ok"]
+    if len(undecided):
+        lines += ["", "Undecided (no-steady) realisations: " + ", ".join(
+            f"theta {r.theta:g} seed {r.seed} (bracket {r.lo:.4g}-{r.hi:.4g})" for r in undecided.itertuples())]
+    lo, hi = summary.iloc[0], summary.iloc[-1]
+    fall = 1 - hi["ratio_to_theta_min"]
+    lines += ["", f"From theta = {lo['theta']:g} to {hi['theta']:g} the dead-weight maximum changes by "
+              f"{-fall:+.1%} ± {hi['ratio_se']:.1%} (ratio {hi['ratio_to_theta_min']:.4f} ± {hi['ratio_se']:.4f})."]
+    if spring is not None:
+        lines += ["", f"Spring drive (`{spring_index}`: the largest seed-mean mu_star over v_d):", "",
+                  "| theta | max mu_star (± SE) | at v_d (m/s) | ratio to smallest theta |", "|---|---|---|---|"]
+        for r in spring.itertuples():
+            lines.append(f"| {r.theta:g} | {r.mu_max:.4f} ± {r.mu_max_se:.4f} | {r.v_d:.3g} | "
+                         f"{r.ratio_to_theta_min:.4f} ± {r.ratio_se:.4f} |")
+    return "\n".join(lines) + "\n"
+
+
+__all__ += ["mu_max_figure", "mu_max_report"]

@@ -50,4 +50,40 @@ def analyze(runs_csv: str | os.PathLike, traces_csv: str | os.PathLike | None, o
     return Analysis(table, peaks, tests, files)
 
 
-__all__ = ["Analysis", "analyze", "write_csv"]
+@dataclass
+class Fit:
+    fits: list
+    files: list[Path]
+
+
+def fit(runs_csv: str | os.PathLike, model: str | os.PathLike, out: str | os.PathLike,
+        truth: str | os.PathLike | None = None) -> Fit:
+    """The model fitted to an analysed runs table (:mod:`slipchain.analysis.fit`): fit.csv,
+    residuals.csv, fit.md and one figure per group in ``out``. FitError (nothing written) for input
+    the fit cannot use."""
+    import json
+
+    from ..analysis.fit import FitError, fit_markdown, fit_runs, model_maxima, parameters_table, residuals_table
+    from ..plots.dead_weight import plot_fit
+
+    try:
+        runs = pd.read_csv(runs_csv)
+    except (OSError, ValueError) as e:
+        raise FitError(f"runs table {str(runs_csv)!r} cannot be read: {e}") from None
+    maxima = model_maxima(model)
+    planted = None
+    if truth is not None:
+        try:
+            planted = {k: float(v) for k, v in json.loads(Path(truth).read_text()).items() if k in ("F", "v0", "delta", "p_ref")}
+        except (OSError, ValueError, TypeError) as e:
+            raise FitError(f"--truth {str(truth)!r} cannot be read as planted.json: {e}") from None
+    fits = fit_runs(runs, maxima)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    files = [write_csv(parameters_table(fits), out / "fit.csv"), write_csv(residuals_table(fits), out / "residuals.csv"),
+             write_text_atomic(out / "fit.md", fit_markdown(fits, str(runs_csv), maxima, planted))]
+    files += [p for p in plot_fit(runs, fits, out) if p.suffix == ".png"]
+    return Fit(fits, files)
+
+
+__all__ = ["Analysis", "Fit", "analyze", "fit", "write_csv"]

@@ -1,0 +1,426 @@
+"""The model fitted to friction-tester data (issue 14, item 3): p_ref, v0, delta and a force scale.
+
+**The fitted model**, per tester group (surface, compound, temperature), with parameters
+``F`` (force scale), ``v0``, ``delta`` and ``p_ref`` (theta = p0 / p_ref, the model's load):
+
+* the rising branch, where under a dead weight every contact slides steadily at the slider's
+  velocity v (eq. 1 of the paper averaged over log10 v* uniform on [log10 v0 - delta, log10 v0 + delta])::
+
+      mu(v) = F * g(v / v0; delta),
+      g(x; delta) = sqrt(pi/c) / (4 delta) * [erf(sqrt(c) (log10 x + delta)) - erf(sqrt(c) (log10 x - delta))]
+
+  (g -> exp(-c log10(x)**2) as delta -> 0; the contact damping m eta_c v / (epsilon f0), below
+  1e-6 here, is left out; ``c`` is the model's, 0.1);
+* the maximum, the largest mu with steady sliding (the tester's first maximum)::
+
+      mu_max(p0) = F * g_max(delta) * r(p0 / p_ref),     g_max(delta) = g(1; delta),
+
+  with ``r(theta) = mu_max_model(theta) / g_max(delta_model)`` from a ``slipchain mu-max`` result
+  (:class:`ModelMaxima`): the model's own lowering of the maximum by collective stick-slip,
+  piecewise linear in log10(theta) between the thetas it was run at and held at the end values
+  outside them (the fit says which pressures fell outside). Assumption, stated: the relative
+  lowering r does not depend on v0 and delta (the model was run at one v0 and delta); F, v0 and
+  delta then act on the mean-field curve exactly.
+
+Steady points above the model's maximum cannot exist in the model; their residuals say so.
+
+**Least squares** (``scipy.optimize.least_squares``, trust-region reflective, bounds
+``theta = p0/p_ref <= 1`` at the largest pressure) in (F, log10 v0, delta, log10 p_ref) on two
+kinds of residual:
+
+* each steady run: ``(mu_i - F g(v_i)) / s_i`` with the effective variance
+  ``s_i**2 = mu_sem_i**2 + (dmu/dln v * v_sem_i / v_i)**2`` (velocity errors through the slope);
+* each pressure with both steady and runaway runs: the maximum lies between the largest steady mu
+  and the smallest runaway mu; ``(m_obs - mu_max(p0)) / s`` with m_obs their midpoint and
+  ``s**2 = (gap/2)**2/3 + sem**2`` (uniform within the gap). Without a runaway a pressure bounds
+  the maximum from below only and gives no maximum residual.
+
+**Run-to-run scatter**: a real surface differs a little from run to run (the synthetic tester
+plants 2 %); the per-run errors (masses, velocity fit) do not contain it. A relative scatter
+``sigma`` is added in quadrature to every run's error, ``(sigma mu_i)**2``, and set so that the
+steady runs' chi2 equals their degrees of freedom (n - 3), alternating with the fit until it
+changes by less than 2 % (at most 4 rounds); it is reported.
+
+**Uncertainties**: covariance ``(J^T J)^-1`` at the optimum (pseudo-inverse: a parameter the data
+do not determine gets an infinite error), multiplied by chi2/dof when that exceeds 1 (the
+run-to-run scatter of real surfaces is not in the per-run errors); 95 % confidence intervals from
+Student's t with dof = residuals - 4; v0 and p_ref are fitted in log10 and their intervals are
+symmetric there. **The load effect**: the fitted fall of the maximum from the smallest to the
+largest pressure, 1 - mu_max(p_hi)/mu_max(p_lo), with its CI (delta method), beside the observed
+one (largest steady mu at each, with the same gap-based errors).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import optimize, special, stats
+
+from ..tester.analysis import GROUP, OK, RUNAWAY, pressure_group
+
+CONFIDENCE = 0.95
+PARAMS = ("F", "v0", "delta", "p_ref")
+LOG_PARAMS = ("v0", "p_ref")  # fitted as log10
+
+
+class FitError(ValueError):
+    """Input the fit cannot use (names what is missing and what was expected)."""
+
+
+def g(v: np.ndarray, v0: float, delta: float, c: float = 0.1) -> np.ndarray:
+    """The mean-field rising branch g(v/v0; delta) (module docstring), in units of epsilon f0."""
+    x = np.log10(np.asarray(v, float) / v0)
+    if delta < 1e-9:
+        return np.exp(-c * x * x)
+    s = math.sqrt(c)
+    return math.sqrt(math.pi / c) / (4 * delta) * (special.erf(s * (x + delta)) - special.erf(s * (x - delta)))
+
+
+def g_max(delta: float, c: float = 0.1) -> float:
+    """g at v = v0, its maximum."""
+    return float(g(np.array(1.0), 1.0, delta, c))
+
+
+def dg_dlnv(v: np.ndarray, v0: float, delta: float, c: float = 0.1) -> np.ndarray:
+    """d g / d ln v (the slope that carries velocity errors into mu)."""
+    x = np.log10(np.asarray(v, float) / v0)
+    if delta < 1e-9:
+        return -2 * c * x * np.exp(-c * x * x) / math.log(10)
+    return (np.exp(-c * (x + delta) ** 2) - np.exp(-c * (x - delta) ** 2)) / (2 * delta * math.log(10))
+
+
+@dataclass(frozen=True)
+class ModelMaxima:
+    """The model's dead-weight maximum per theta (a ``slipchain mu-max`` result) as the lowering r(theta)."""
+
+    theta: np.ndarray
+    r: np.ndarray  # mu_max(theta) / g_max(delta_model)
+    r_se: np.ndarray
+    c: float = 0.1
+    source: str = ""
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        lt = np.log10(np.clip(np.asarray(theta, float), 1e-300, None))
+        return np.interp(lt, np.log10(self.theta), self.r)
+
+    def outside(self, theta: np.ndarray) -> np.ndarray:
+        theta = np.asarray(theta, float)
+        return (theta < self.theta.min() * (1 - 1e-9)) | (theta > self.theta.max() * (1 + 1e-9))
+
+
+def model_maxima(path: str | os.PathLike) -> ModelMaxima:
+    """Read a ``slipchain mu-max`` output directory (mu_max_summary.csv and plan.toml)."""
+    from ..model.config import ConfigError, make_config, read_toml
+
+    folder = Path(path)
+    summary_csv, plan_file = folder / "mu_max_summary.csv", folder / "plan.toml"
+    for f in (summary_csv, plan_file):
+        if not f.is_file():
+            raise FitError(f"model {str(folder)!r} has no {f.name}; expected the output directory of "
+                           "`slipchain mu-max` (mu_max_summary.csv and plan.toml)")
+    table = pd.read_csv(summary_csv)
+    missing = [c for c in ("theta", "mu_max", "mu_max_se") if c not in table.columns]
+    if missing:
+        raise FitError(f"{str(summary_csv)!r} lacks column(s) {missing}; expected a mu_max_summary.csv of `slipchain mu-max`")
+    table = table[np.isfinite(table["mu_max"])].sort_values("theta")
+    if table["theta"].nunique() < 2:
+        raise FitError(f"{str(summary_csv)!r} has mu_max at {table['theta'].nunique()} theta value(s); the load "
+                       "dependence needs at least 2 (run `slipchain mu-max` with several --theta)")
+    try:
+        base = make_config(dict(read_toml(plan_file).get("base", {})))
+    except ConfigError as e:
+        raise FitError(f"{str(plan_file)!r}: {e}") from None
+    gm = g_max(base.delta, base.c)
+    return ModelMaxima(table["theta"].to_numpy(float), table["mu_max"].to_numpy(float) / gm,
+                       table["mu_max_se"].to_numpy(float) / gm, base.c, str(folder))
+
+
+@dataclass
+class Estimate:
+    value: float
+    se: float
+    ci_low: float
+    ci_high: float
+
+
+@dataclass
+class FitResult:
+    """The fit of one tester group."""
+
+    group: tuple
+    params: dict[str, Estimate]
+    chi2: float
+    dof: int
+    scale: float  # the factor applied to the covariance (chi2/dof if > 1, else 1)
+    scatter: float  # the relative run-to-run scatter added to every run's error (estimated)
+    pressures: pd.DataFrame  # per pressure: theta, residuals, observed and fitted maxima
+    fall_fitted: Estimate  # 1 - mu_max(p_hi)/mu_max(p_lo) of the fitted model
+    fall_observed: Estimate
+    converged: bool
+    message: str
+    notes: list[str] = field(default_factory=list)
+
+    def curve(self, p0: float, v: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """The fitted model at pressure p0: mu on ``v`` (NaN past the maximum), and (v_max, mu_max)."""
+        F, v0, delta, p_ref = (self.params[k].value for k in PARAMS)
+        return _curve(F, v0, delta, p_ref, p0, v, self._maxima)
+
+    _maxima: ModelMaxima | None = None
+
+
+def _curve(F, v0, delta, p_ref, p0, v, maxima: ModelMaxima):
+    mu_top = F * g_max(delta, maxima.c) * float(maxima(p0 / p_ref))
+    # the end of the steady branch: where F g = mu_top, below v0
+    if mu_top >= F * g_max(delta, maxima.c):
+        v_top = v0
+    else:
+        v_top = 10 ** optimize.brentq(lambda lv: F * float(g(10**lv, v0, delta, maxima.c)) - mu_top,
+                                      math.log10(v0) - 30, math.log10(v0))
+    mu = F * g(v, v0, delta, maxima.c)
+    return np.where(np.asarray(v) <= v_top, mu, np.nan), v_top, mu_top
+
+
+def _prepare(g_runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    steady = g_runs[(g_runs["status"] == OK) & np.isfinite(g_runs["velocity_m_s"]) & (g_runs["velocity_m_s"] > 0)]
+    rows = []
+    for p, grp in g_runs.groupby("pressure_group_Pa"):
+        ok, run = grp[grp["status"] == OK], grp[grp["status"] == RUNAWAY]
+        row = {"pressure_Pa": float(grp["pressure_Pa"].mean()), "n_steady": len(ok), "n_runaway": len(run),
+               "mu_steady_max": np.nan, "mu_runaway_min": np.nan, "m_obs": np.nan, "m_obs_se": np.nan}
+        if len(ok):
+            top = ok.loc[ok["mu"].idxmax()]
+            row["mu_steady_max"] = float(top["mu"])
+        if len(run):
+            row["mu_runaway_min"] = float(run["mu"].min())
+        if len(ok) and len(run):
+            lo, hi = row["mu_steady_max"], row["mu_runaway_min"]
+            sem = float(np.hypot(top["mu_sem"], run.loc[run["mu"].idxmin(), "mu_sem"]))
+            row["m_obs"] = 0.5 * (lo + hi)
+            row["m_obs_se"] = float(np.hypot(abs(hi - lo) / 2 / math.sqrt(3), sem))
+        rows.append(row)
+    return steady, pd.DataFrame(rows).sort_values("pressure_Pa", ignore_index=True)
+
+
+def fit_group(runs: pd.DataFrame, maxima: ModelMaxima, group: tuple = ()) -> FitResult:
+    """Fit one group's runs (rows of an analysed ``runs.csv``) to the model (module docstring)."""
+    runs = runs.copy()
+    runs["pressure_group_Pa"] = runs["pressure_Pa"].map(pressure_group)
+    steady, press = _prepare(runs)
+    if len(steady) < 3:
+        raise FitError(f"group {group}: {len(steady)} steady run(s) with a velocity; the fit needs at least 3")
+    if len(press) < 2:
+        raise FitError(f"group {group}: runs at {len(press)} pressure; p_ref needs at least 2 pressures")
+    v, mu = steady["velocity_m_s"].to_numpy(float), steady["mu"].to_numpy(float)
+    mu_sem = np.nan_to_num(steady["mu_sem"].to_numpy(float), nan=0.0)
+    v_sem = np.nan_to_num(steady["velocity_sem_m_s"].to_numpy(float), nan=0.0)
+    with_max = press[np.isfinite(press["m_obs"])]
+    p_max = float(press["pressure_Pa"].max())
+    c = maxima.c
+    floor = 1e-3 * float(np.median(np.abs(mu)))  # keeps s > 0 for noiseless input
+
+    def unpack(q):
+        return q[0], 10 ** q[1], q[2], 10 ** q[3]
+
+    def residuals(q, scatter):
+        F, v0, delta, p_ref = unpack(q)
+        model = F * g(v, v0, delta, c)
+        slope = F * dg_dlnv(v, v0, delta, c)
+        s = np.sqrt(mu_sem**2 + (slope * v_sem / v) ** 2 + (scatter * mu) ** 2 + floor**2)
+        r_steady = (mu - model) / s
+        th = with_max["pressure_Pa"].to_numpy(float) / p_ref
+        mmod = F * g_max(delta, c) * maxima(th)
+        m_obs = with_max["m_obs"].to_numpy(float)
+        r_max = (m_obs - mmod) / np.hypot(with_max["m_obs_se"].to_numpy(float), scatter * m_obs)
+        return np.concatenate([r_steady, r_max])
+
+    def scatter_for(q) -> float:
+        """The relative run-to-run scatter that makes the steady runs' chi2 equal their dof (0 if it already is below)."""
+        target = max(len(steady) - 3, 1)
+
+        def excess(sc):
+            return float(np.sum(residuals(q, sc)[: len(steady)] ** 2)) - target
+
+        return 0.0 if excess(0.0) <= 0 else optimize.brentq(excess, 0.0, 10.0, xtol=1e-6)
+
+    # start: F from the largest steady mu, v0 a little above its velocity, delta 0.5, p_ref = 2 p_max
+    top = int(np.argmax(mu))
+    q0 = np.array([mu[top] / g_max(0.5, c), math.log10(v[top]) + 0.3, 0.5, math.log10(2 * p_max)])
+    lower = np.array([1e-6, math.log10(v.min()) - 6, 0.0, math.log10(p_max)])
+    upper = np.array([1e6, math.log10(v.max()) + 6, 10.0, math.log10(p_max) + 6])
+    q0 = np.clip(q0, lower + 1e-9, upper - 1e-9)
+    scatter = 0.0
+    for _ in range(4):  # fit, then estimate the run-to-run scatter from the steady residuals, refit
+        best = None
+        for d0 in (0.5, 0.1, 1.5):  # a few starts in delta (the residuals are not convex in it)
+            start = q0.copy()
+            start[2] = d0
+            sol = optimize.least_squares(residuals, start, bounds=(lower, upper), x_scale="jac", method="trf",
+                                         args=(scatter,))
+            if best is None or sol.cost < best.cost:
+                best = sol
+        sol = best
+        new_scatter = scatter_for(sol.x)
+        if abs(new_scatter - scatter) <= 0.02 * max(new_scatter, 1e-12):
+            scatter = new_scatter
+            break
+        scatter, q0 = new_scatter, sol.x
+    res = sol.fun
+    n, k = res.size, 4
+    dof = max(n - k, 1)
+    chi2 = float(res @ res)
+    scale = max(chi2 / dof, 1.0)
+    J = sol.jac
+    cov = np.linalg.pinv(J.T @ J) * scale
+    # a direction the data do not fix (flat r, or a parameter at its bound) has a huge or zero variance
+    singular = np.linalg.svd(J, compute_uv=False)
+    notes = []
+    if singular.min() < 1e-8 * singular.max():
+        notes.append("the data do not determine every parameter (near-singular Jacobian): see the infinite errors")
+    tq = stats.t.ppf(0.5 + CONFIDENCE / 2, dof)
+    params: dict[str, Estimate] = {}
+    for i, name in enumerate(PARAMS):
+        se = math.sqrt(cov[i, i]) if cov[i, i] > 0 else 0.0
+        if singular.min() < 1e-8 * singular.max() and abs(_null_weight(J, i)) > 0.5:
+            se = math.inf
+        x = sol.x[i]
+        if name in LOG_PARAMS:
+            params[name] = Estimate(10**x, 10**x * math.log(10) * se, 10 ** (x - tq * se), 10 ** (x + tq * se))
+        else:
+            params[name] = Estimate(x, se, x - tq * se, x + tq * se)
+    at_bound = [PARAMS[i] for i in range(k) if sol.active_mask[i] != 0]
+    if at_bound:
+        notes.append(f"at a bound of its range: {', '.join(at_bound)} (theta = p0/p_ref <= 1 at the largest pressure "
+                     "bounds p_ref from below)")
+    F, v0, delta, p_ref = unpack(sol.x)
+    theta = press["pressure_Pa"].to_numpy(float) / p_ref
+    if maxima.outside(theta).any():
+        out = ", ".join(f"{t:.3g}" for t in theta[maxima.outside(theta)])
+        notes.append(f"theta = {out} outside the model's thetas [{maxima.theta.min():g}, {maxima.theta.max():g}]: r held "
+                     "at its end value there")
+    # per pressure: residuals of its steady runs, the observed and fitted maxima
+    rsteady = res[: len(steady)]
+    pg = steady["pressure_group_Pa"].to_numpy(float)
+    press = press.assign(
+        theta=theta,
+        mu_max_fitted=F * g_max(delta, c) * maxima(theta),
+        steady_residual_mean=[float(rsteady[pg == pressure_group(p)].mean()) if (pg == pressure_group(p)).any()
+                              else np.nan for p in press["pressure_Pa"]],
+        steady_residual_rms=[float(np.sqrt((rsteady[pg == pressure_group(p)] ** 2).mean()))
+                             if (pg == pressure_group(p)).any() else np.nan for p in press["pressure_Pa"]],
+    )
+    press["max_residual"] = (press["m_obs"] - press["mu_max_fitted"]) / press["m_obs_se"]
+    # the fall of the maximum from the smallest to the largest pressure: fitted (delta method) and observed
+    p_lo, p_hi = float(press["pressure_Pa"].iloc[0]), float(press["pressure_Pa"].iloc[-1])
+
+    def fall(q):
+        _, _, _, pr = unpack(q)
+        return 1.0 - float(maxima(p_hi / pr) / maxima(p_lo / pr))
+
+    grad = optimize.approx_fprime(sol.x, fall, 1e-6)
+    se_fall = float(math.sqrt(max(grad @ cov @ grad, 0.0)))
+    f_fit = fall(sol.x)
+    fitted = Estimate(f_fit, se_fall, f_fit - tq * se_fall, f_fit + tq * se_fall)
+    observed = _observed_fall(press, tq)
+    result = FitResult(group, params, chi2, dof, scale, scatter, press, fitted, observed, bool(sol.success), sol.message,
+                       notes)
+    result._maxima = maxima
+    return result
+
+
+def _null_weight(J: np.ndarray, i: int) -> float:
+    """How much parameter i takes part in the least determined direction (its right singular vector)."""
+    _, _, vt = np.linalg.svd(J, full_matrices=False)
+    return float(vt[-1, i])
+
+
+def _observed_fall(press: pd.DataFrame, tq: float) -> Estimate:
+    lo, hi = press.iloc[0], press.iloc[-1]
+    m_lo = lo["m_obs"] if np.isfinite(lo["m_obs"]) else lo["mu_steady_max"]
+    m_hi = hi["m_obs"] if np.isfinite(hi["m_obs"]) else hi["mu_steady_max"]
+    s_lo = lo["m_obs_se"] if np.isfinite(lo["m_obs_se"]) else np.nan
+    s_hi = hi["m_obs_se"] if np.isfinite(hi["m_obs_se"]) else np.nan
+    f = 1.0 - m_hi / m_lo
+    se = (m_hi / m_lo) * math.hypot(s_lo / m_lo, s_hi / m_hi)
+    return Estimate(float(f), float(se), float(f - tq * se), float(f + tq * se))
+
+
+def fit_runs(runs: pd.DataFrame, maxima: ModelMaxima) -> list[FitResult]:
+    """One fit per (surface, compound, temperature) group of an analysed runs table."""
+    need = ["status", "pressure_Pa", "velocity_m_s", "velocity_sem_m_s", "mu", "mu_sem", *GROUP]
+    missing = [c for c in need if c not in runs.columns]
+    if missing:
+        raise FitError(f"the runs table lacks column(s) {missing}; expected the runs.csv of `slipchain tester analyze`")
+    usable = runs[runs["status"].isin([OK, RUNAWAY])]
+    if usable.empty:
+        raise FitError("the runs table has no steady or runaway run; nothing to fit")
+    return [fit_group(grp, maxima, key if isinstance(key, tuple) else (key,))
+            for key, grp in usable.groupby(GROUP, sort=True)]
+
+
+def parameters_table(fits: list[FitResult]) -> pd.DataFrame:
+    """fit.csv: one row per group and parameter (value, SE, 95 % CI), plus the load effect."""
+    rows = []
+    for f in fits:
+        key = dict(zip(GROUP, f.group))
+        for name, e in [*f.params.items(), ("fall_fitted", f.fall_fitted), ("fall_observed", f.fall_observed)]:
+            rows.append({**key, "parameter": name, "value": e.value, "se": e.se, "ci_low": e.ci_low,
+                         "ci_high": e.ci_high, "chi2": f.chi2, "dof": f.dof})
+    return pd.DataFrame(rows)
+
+
+def residuals_table(fits: list[FitResult]) -> pd.DataFrame:
+    """residuals.csv: per group and pressure."""
+    return pd.concat([f.pressures.assign(**dict(zip(GROUP, f.group))) for f in fits], ignore_index=True)
+
+
+def predicts_fall(f: FitResult) -> str:
+    """Does the fitted model predict the observed fall of the maximum? (overlap of the two CIs)."""
+    a, b = f.fall_fitted, f.fall_observed
+    if not (np.isfinite(b.value) and np.isfinite(b.se)):
+        return "the data give no observed fall (no runaway at the smallest or largest pressure)"
+    diff = a.value - b.value
+    se = math.hypot(a.se, b.se)
+    z = diff / se if se > 0 else math.inf
+    verdict = "yes" if abs(z) <= 2 else "no"
+    return (f"{verdict}: fitted fall {a.value:.1%} ± {a.se:.1%}, observed {b.value:.1%} ± {b.se:.1%} "
+            f"(difference {diff:+.1%}, {abs(z):.1f} standard errors)")
+
+
+def fit_markdown(fits: list[FitResult], runs_source: str, maxima: ModelMaxima, truth: dict | None = None) -> str:
+    lines = ["# The model fitted to tester data", "",
+             f"Runs: `{runs_source}`. Model maxima: `{maxima.source}` (theta {', '.join(f'{t:g}' for t in maxima.theta)}: "
+             f"r = {', '.join(f'{r:.4f}' for r in maxima.r)}). Method: `slipchain.analysis.fit` (least squares on the "
+             "mean-field rising branch and the model's maxima; 95 % CIs).", ""]
+    for f in fits:
+        lines += [f"## {' / '.join(str(x) for x in f.group)}", "",
+                  f"chi2 = {f.chi2:.1f} for {f.dof} degrees of freedom (covariance scaled by {f.scale:.2f}); "
+                  f"run-to-run scatter {f.scatter:.2%}; "
+                  f"{'converged' if f.converged else 'NOT converged: ' + f.message}.", "",
+                  "| parameter | value | SE | 95 % CI |" + (" planted |" if truth else ""),
+                  "|---|---|---|---|" + ("---|" if truth else "")]
+        for name, e in f.params.items():
+            row = f"| {name} | {e.value:.4g} | {e.se:.2g} | [{e.ci_low:.4g}, {e.ci_high:.4g}] |"
+            if truth:
+                t = truth.get(name)
+                row += f" {t:.4g} ({'inside' if t is not None and e.ci_low <= t <= e.ci_high else 'OUTSIDE'}) |"
+            lines.append(row)
+        lines += ["", "| p0 (kPa) | theta | steady runs | mean residual (SE) | observed max | fitted max |",
+                  "|---|---|---|---|---|---|"]
+        for r in f.pressures.itertuples():
+            obs = f"{r.m_obs:.4f} ± {r.m_obs_se:.4f}" if np.isfinite(r.m_obs) else f">= {r.mu_steady_max:.4f}"
+            lines.append(f"| {r.pressure_Pa / 1e3:.3g} | {r.theta:.3g} | {r.n_steady} | {r.steady_residual_mean:+.2f} | "
+                         f"{obs} | {r.mu_max_fitted:.4f} |")
+        lines += ["", f"Does the fitted model predict the measured fall of mu_max with pressure? {predicts_fall(f)}.", ""]
+        lines += [f"Note: {n}." for n in f.notes]
+        lines.append("")
+    return "\n".join(lines)
+
+
+__all__ = ["CONFIDENCE", "PARAMS", "Estimate", "FitError", "FitResult", "ModelMaxima", "dg_dlnv", "fit_group",
+           "fit_markdown", "fit_runs", "g", "g_max", "model_maxima", "parameters_table", "predicts_fall",
+           "residuals_table"]

@@ -1,0 +1,148 @@
+"""The experiment's observable from the model (issue 14): Figs. 2-3 of the paper as the model sees
+them, and the model fitted to tester data.
+
+:func:`plot_mu_max`: (a) mu(v) under a dead weight per theta, on the tester figure's axes: every
+steady dead-weight run (applied mu_a against its measured velocity), runaways at the right edge,
+the seed-mean mu_max as a bar, and the rising branch every contact would follow sliding steadily
+(eq. 1 averaged over v*, dashed); (b) mu_max(theta)/mu_max(theta_min) with its standard error,
+beside the spring-drive maximum of mu_star(v_d) (the velocity sweep) on the same scale.
+:func:`plot_fit`: per tester group, the data per pressure with the fitted model's curves
+(:mod:`slipchain.analysis.fit`) and the observed against the fitted maxima.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..tester.analysis import OK, RUNAWAY, pressure_group
+from .common import pyplot, save_figure
+
+
+def spring_drive_maxima(index_csv: str | os.PathLike) -> pd.DataFrame:
+    """The spring-drive maximum per theta from a velocity sweep's index (v_d, theta, seed, mu_star):
+    the largest seed-mean mu_star over v_d, its standard error (seed scatter) and the ratio to the
+    smallest theta's."""
+    t = pd.read_csv(index_csv)
+    missing = [c for c in ("v_d", "theta", "seed", "mu_star") if c not in t.columns]
+    if missing:
+        raise ValueError(f"{str(index_csv)!r} lacks column(s) {missing}; expected the index of a sweep over v_d and theta "
+                         "(e.g. docs/mechanism/velocity-index.csv)")
+    g = t.groupby(["theta", "v_d"])["mu_star"].agg(["mean", "std", "count"]).reset_index()
+    rows = []
+    for theta, gt in g.groupby("theta"):
+        top = gt.loc[gt["mean"].idxmax()]
+        se = float(top["std"]) / np.sqrt(top["count"]) if top["count"] > 1 else np.nan
+        rows.append({"theta": theta, "mu_max": float(top["mean"]), "mu_max_se": se, "v_d": float(top["v_d"])})
+    out = pd.DataFrame(rows)
+    ref, ref_se = out["mu_max"].iloc[0], out["mu_max_se"].iloc[0]
+    out["ratio_to_theta_min"] = out["mu_max"] / ref
+    out["ratio_se"] = out["ratio_to_theta_min"] * np.hypot(out["mu_max_se"] / out["mu_max"], ref_se / ref)
+    return out
+
+
+def plot_mu_max(summary: pd.DataFrame, evaluations: pd.DataFrame, branch: tuple[np.ndarray, np.ndarray],
+                spring: pd.DataFrame | None, out: str | os.PathLike) -> list[Path]:
+    """The two panels (module docstring); ``branch`` = (v, mu) of the all-steady rising branch."""
+    plt = pyplot()
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.4), gridspec_kw={"width_ratios": [1.35, 1]})
+    thetas = sorted(evaluations["theta"].unique())
+    colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))))
+    ok = evaluations[evaluations["velocity_status"] == OK]
+    run = evaluations[evaluations["velocity_status"] == RUNAWAY]
+    v_lo = ok["velocity_m_s"].min() if len(ok) else 1e-6
+    v_hi = ok["velocity_m_s"].max() if len(ok) else 1e-3
+    x_edge = v_hi * 3
+    bv, bm = branch
+    sel = (bv >= v_lo / 2) & (bv <= v_hi * 1.5)
+    ax.plot(bv[sel], bm[sel], "k--", lw=1, label="every contact sliding steadily (eq. 1 averaged over v*)")
+    for th in thetas:
+        c = colors[th]
+        o = ok[ok["theta"] == th]
+        ax.plot(o["velocity_m_s"], o["mu_a"], "o", ms=3.5, color=c, alpha=0.8, ls="none",
+                label=f"theta = {th:g}: steady (all seeds)")
+        r = run[run["theta"] == th]
+        if len(r):
+            ax.plot(np.full(len(r), x_edge) * (1 + 0.08 * thetas.index(th)), r["mu_a"], ">", ms=4, color=c, ls="none")
+        srow = summary[summary["theta"] == th]
+        if len(srow):
+            s = srow.iloc[0]
+            ax.errorbar([s["v_max_m_s"]], [s["mu_max"]], yerr=[s["mu_max_se"]], fmt="_", ms=16, mew=2, color=c,
+                        capsize=3)
+    ax.plot([], [], ">", color="gray", ls="none", label="runaway (drawn at the right edge)")
+    ax.plot([], [], "_", color="gray", ms=12, mew=2, ls="none", label="mu_max (seed mean ± SE) at v_max")
+    ax.set_xscale("log")
+    ax.set_xlabel("v (m/s)")
+    ax.set_ylabel(r"applied $\mu_a$ (dead weight)")
+    ax.set_title("(a) model under a dead weight: mu(v) on the rising branch", fontsize=10)
+    ax.legend(fontsize=7, loc="lower right")
+    bx.errorbar(summary["theta"], summary["ratio_to_theta_min"], yerr=summary["ratio_se"], fmt="o-", color="tab:red",
+                capsize=3, label="dead weight: mu_max (bisection, ± SE)")
+    if spring is not None and len(spring):
+        bx.errorbar(spring["theta"], spring["ratio_to_theta_min"], yerr=spring["ratio_se"].fillna(0), fmt="s--",
+                    color="tab:blue", capsize=3, label="spring drive: max over v_d of mu_star")
+    bx.axhline(1.0, color="gray", lw=0.8)
+    bx.set_xscale("log")
+    bx.set_xlabel(r"$\theta$ (load)")
+    bx.set_ylabel(r"maximum / maximum at the smallest $\theta$")
+    bx.set_title("(b) the first maximum against load", fontsize=10)
+    bx.legend(fontsize=7)
+    fig.tight_layout()
+    return save_figure(fig, out, "mu_max")
+
+
+def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Path]:
+    """Per fitted group: measured mu(v) per pressure with the fitted curves; observed vs fitted maxima."""
+    from ..tester.analysis import GROUP
+
+    plt = pyplot()
+    paths: list[Path] = []
+    for f in fits:
+        g = runs
+        for k, v in zip(GROUP, f.group):
+            g = g[g[k] == v]
+        g = g.assign(p_group=g["pressure_Pa"].map(pressure_group))
+        fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.4), gridspec_kw={"width_ratios": [1.4, 1]})
+        pressures = sorted(g["p_group"].unique())
+        colors = plt.cm.viridis(np.linspace(0, 0.85, len(pressures)))
+        ok = g[(g["status"] == OK) & (g["velocity_m_s"] > 0)]
+        v = np.geomspace(ok["velocity_m_s"].min() / 3, ok["velocity_m_s"].max() * 3, 400)
+        for p, c in zip(pressures, colors):
+            gp = ok[ok["p_group"] == p]
+            ax.errorbar(gp["velocity_m_s"], gp["mu"], yerr=gp["mu_sem"], xerr=gp["velocity_sem_m_s"].fillna(0),
+                        fmt="o", ms=4, color=c, capsize=2, label=f"measured, p0 = {p / 1e3:.3g} kPa")
+            rp = g[(g["p_group"] == p) & (g["status"] == RUNAWAY)]
+            ax.plot(np.full(len(rp), v[-1]), rp["mu"], ">", color=c, ms=5, ls="none")
+            mu, v_top, mu_top = f.curve(float(gp["pressure_Pa"].mean() if len(gp) else p), v)
+            ax.plot(v, mu, "-", color=c, lw=1.3)
+            ax.plot([v_top], [mu_top], "*", color=c, ms=10)
+        ax.plot([], [], "k-", label="fitted model (ends at its maximum, *)")
+        ax.plot([], [], ">", color="gray", ls="none", label="runaway (right edge)")
+        ax.set_xscale("log")
+        ax.set_xlabel("v (m/s)")
+        ax.set_ylabel(r"$\mu$")
+        e = f.params
+        ax.set_title(f"{' / '.join(str(x) for x in f.group)}: F = {e['F'].value:.3g}, v0 = {e['v0'].value:.2g} m/s, "
+                     f"delta = {e['delta'].value:.2g}, p_ref = {e['p_ref'].value / 1e3:.3g} kPa", fontsize=9)
+        ax.legend(fontsize=7, loc="lower right")
+        pr = f.pressures
+        has = np.isfinite(pr["m_obs"])
+        bx.errorbar(pr["pressure_Pa"][has] / 1e3, pr["m_obs"][has], yerr=pr["m_obs_se"][has], fmt="o", color="k",
+                    capsize=3, label="observed maximum (between steady and runaway)")
+        bx.plot(pr["pressure_Pa"] / 1e3, pr["mu_steady_max"], "v", color="gray", ls="none", label="largest steady mu")
+        bx.plot(pr["pressure_Pa"] / 1e3, pr["mu_max_fitted"], "s-", color="tab:red", label="fitted model")
+        bx.set_xlabel("p0 (kPa)")
+        bx.set_ylabel(r"$\mu_{max}$")
+        bx.set_title(f"fall of the maximum: fitted {f.fall_fitted.value:.1%} ± {f.fall_fitted.se:.1%}, observed "
+                     f"{f.fall_observed.value:.1%} ± {f.fall_observed.se:.1%}", fontsize=9)
+        bx.legend(fontsize=7)
+        fig.tight_layout()
+        stem = "fit_" + "-".join(str(x).replace(" ", "_").replace("/", "_") for x in f.group)
+        paths += save_figure(fig, out, stem)
+    return paths
+
+
+__all__ = ["plot_fit", "plot_mu_max", "spring_drive_maxima"]
