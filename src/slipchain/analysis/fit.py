@@ -421,6 +421,43 @@ def fit_markdown(fits: list[FitResult], runs_source: str, maxima: ModelMaxima, t
     return "\n".join(lines)
 
 
-__all__ = ["CONFIDENCE", "PARAMS", "Estimate", "FitError", "FitResult", "ModelMaxima", "dg_dlnv", "fit_group",
+@dataclass(frozen=True)
+class ModelLaw:
+    """The fitted model planted as the synthetic tester's mu(v, p0) (:mod:`slipchain.tester.synth`), so that a
+    fit of the synthetic data can be checked against known F, v0, delta and p_ref: the mean-field
+    rising branch F*g(v/v0; delta) up to the model's maximum F*g_max(delta)*r(p0/p_ref) (``r`` a
+    :class:`~slipchain.analysis.fit.ModelMaxima`), then falling as the branch mirrored about its
+    end (so that a weight above the maximum runs away)."""
+
+    r: ModelMaxima
+    F: float = 1.2
+    v0: float = 3e-3
+    delta: float = 0.7
+    p_ref: float = 60e3
+    factor: float = 1.0
+
+    def _top(self, p0: float) -> tuple[float, float]:
+        _, v_top, mu_top = _curve(self.F, self.v0, self.delta, self.p_ref, p0, np.array([self.v0]), self.r)
+        return v_top, mu_top
+
+    def mu(self, v: np.ndarray | float, p0: float) -> np.ndarray:
+        v_top, _ = self._top(p0)
+        v = np.maximum(np.asarray(v, float), 1e-300)
+        mirrored = np.where(v <= v_top, v, v_top**2 / v)  # past the end: back down the branch
+        return self.factor * self.F * g(mirrored, self.v0, self.delta, self.r.c)
+
+    def maximum(self, p0: float) -> tuple[float, float]:
+        v_top, mu_top = self._top(p0)
+        return v_top, self.factor * mu_top
+
+    def steady_velocity(self, mu_target: float, p0: float) -> float:
+        v_max, mu_max = self.maximum(p0)
+        if not mu_target < mu_max:
+            raise ValueError(f"mu = {mu_target} is above the maximum {mu_max} at p0 = {p0}")
+        return 10.0 ** optimize.brentq(lambda lv: float(self.mu(10.0**lv, p0)) - mu_target, np.log10(v_max) - 20,
+                                       np.log10(v_max), xtol=1e-13)
+
+
+__all__ = ["CONFIDENCE", "ModelLaw", "PARAMS", "Estimate", "FitError", "FitResult", "ModelMaxima", "dg_dlnv", "fit_group",
            "fit_markdown", "fit_runs", "g", "g_max", "model_maxima", "parameters_table", "predicts_fall",
            "residuals_table"]

@@ -57,13 +57,13 @@ def synth(
     import json
 
     from ..results.io import write_text_atomic
-    from ..tester.synth import NOTICE, ModelLaw, SynthSetup, write_synthetic
+    from ..tester.synth import NOTICE, SynthSetup, write_synthetic
 
     setup = SynthSetup(seed=seed)
     if model is None:
         paths = write_synthetic(out_dir, replace(setup, law=replace(setup.law, s=load_effect)))
     else:
-        from ..analysis.fit import FitError, model_maxima
+        from ..analysis.fit import FitError, ModelLaw, model_maxima
 
         bad = [(k, x) for k, x in (("--f-scale", f_scale), ("--v0", v0), ("--p-ref", p_ref)) if not x > 0]
         bad += [("--delta", delta)] if not delta >= 0 else []
@@ -100,10 +100,14 @@ def fit(
 
     t = Table(title="slipchain tester fit (95 % CI)")
     for col in ("group", "F", "v0 (m/s)", "delta", "p_ref (kPa)", "predicts the fall?"):
-        t.add_column(col)
+        t.add_column(col, overflow="fold")
     for f in result.fits:
         e = f.params
         ci = lambda k, s=1.0: f"{e[k].value / s:.4g} [{e[k].ci_low / s:.3g}, {e[k].ci_high / s:.3g}]"  # noqa: E731
-        t.add_row(" / ".join(map(str, f.group)), ci("F"), ci("v0"), ci("delta"), ci("p_ref", 1e3), predicts_fall(f))
+        t.add_row(" / ".join(map(str, f.group)), ci("F"), ci("v0"), ci("delta"), ci("p_ref", 1e3),
+                  predicts_fall(f).split(":")[0])
     out.print(t)
+    for f in result.fits:
+        out.print(f"{' / '.join(map(str, f.group))}: does the fitted model predict the measured fall of mu_max with "
+                  f"pressure? {predicts_fall(f)}", markup=False)
     out.print(f"wrote {', '.join(str(p) for p in result.files)}")

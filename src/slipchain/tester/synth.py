@@ -79,49 +79,10 @@ class SynthLaw:
 
 
 @dataclass(frozen=True)
-class ModelLaw:
-    """The fitted model of :mod:`slipchain.analysis.fit` planted as the tester's mu(v, p0), so that a
-    fit of the synthetic data can be checked against known F, v0, delta and p_ref: the mean-field
-    rising branch F*g(v/v0; delta) up to the model's maximum F*g_max(delta)*r(p0/p_ref) (``r`` a
-    :class:`~slipchain.analysis.fit.ModelMaxima`), then falling as the branch mirrored about its
-    end (so that a weight above the maximum runs away)."""
-
-    r: object  # ModelMaxima
-    F: float = 1.2
-    v0: float = 3e-3
-    delta: float = 0.7
-    p_ref: float = 60e3
-    factor: float = 1.0
-
-    def _top(self, p0: float) -> tuple[float, float]:
-        from ..analysis.fit import _curve
-
-        _, v_top, mu_top = _curve(self.F, self.v0, self.delta, self.p_ref, p0, np.array([self.v0]), self.r)
-        return v_top, mu_top
-
-    def mu(self, v: np.ndarray | float, p0: float) -> np.ndarray:
-        from ..analysis.fit import g
-
-        v_top, _ = self._top(p0)
-        v = np.maximum(np.asarray(v, float), 1e-300)
-        mirrored = np.where(v <= v_top, v, v_top**2 / v)  # past the end: back down the branch
-        return self.factor * self.F * g(mirrored, self.v0, self.delta, self.r.c)
-
-    def maximum(self, p0: float) -> tuple[float, float]:
-        v_top, mu_top = self._top(p0)
-        return v_top, self.factor * mu_top
-
-    def steady_velocity(self, mu_target: float, p0: float) -> float:
-        v_max, mu_max = self.maximum(p0)
-        if not mu_target < mu_max:
-            raise ValueError(f"mu = {mu_target} is above the maximum {mu_max} at p0 = {p0}")
-        return 10.0 ** brentq(lambda lv: float(self.mu(10.0**lv, p0)) - mu_target, np.log10(v_max) - 20,
-                              np.log10(v_max), xtol=1e-13)
-
-
-@dataclass(frozen=True)
 class SynthSetup:
-    law: SynthLaw | ModelLaw = field(default_factory=SynthLaw)
+    # the planted mu(v, p0): SynthLaw, or any object with its mu, maximum, steady_velocity and factor
+    # (slipchain.analysis.fit.ModelLaw plants the fitted model)
+    law: SynthLaw = field(default_factory=SynthLaw)
     surface: str = "synthetic-asphalt"
     compound: str = "synthetic-tread"
     temperature_C: float = 20.0
@@ -210,7 +171,7 @@ def write_synthetic(out: str | os.PathLike, setup: SynthSetup = SynthSetup()) ->
     truth.to_csv(paths["truth"], index=False)
     params = "\n".join(f"  {f.name} = {getattr(setup, f.name)}" for f in fields(setup) if f.name != "law")
     law = "\n".join(f"  {f.name} = {getattr(setup.law, f.name)}" for f in fields(setup.law) if f.name != "r")
-    if isinstance(setup.law, ModelLaw):
+    if hasattr(setup.law, "r"):  # analysis.fit.ModelLaw: its lowering of the maximum
         law += (f"\n  r(theta): the model's lowering of the maximum from {setup.law.r.source or 'a table'} "
                 f"(theta {list(np.round(setup.law.r.theta, 4))}, r {list(np.round(setup.law.r.r, 4))})")
     paths["readme"].write_text(f"{NOTICE}\n\nLaw (slipchain.tester.synth.{type(setup.law).__name__}):\n{law}\n\nSet-up:\n{params}\n\n"
@@ -218,4 +179,4 @@ def write_synthetic(out: str | os.PathLike, setup: SynthSetup = SynthSetup()) ->
     return paths
 
 
-__all__ = ["NOTICE", "ModelLaw", "SynthLaw", "SynthSetup", "simulate_run", "synthesize", "write_synthetic"]
+__all__ = ["NOTICE", "SynthLaw", "SynthSetup", "simulate_run", "synthesize", "write_synthetic"]
