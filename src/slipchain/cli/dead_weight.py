@@ -44,6 +44,8 @@ def mu_max(
     out.print(t)
     undecided = result.table[result.table["status"] != "ok"]
     if len(undecided):
-        out.print(f"{len(undecided)} realisation(s) undecided (no-steady): give a longer t_max (with t_decide) or "
-                  "t_total", markup=False)
+        out.print(f"{len(undecided)} realisation(s) not decided (in mu_max.csv with their reason; the summary leaves "
+                  "them out):", markup=False)
+        for r in undecided.itertuples():
+            out.print(f"  theta {r.theta:g} seed {r.seed}: {r.status}: {r.message}", markup=False)
         raise typer.Exit(1)

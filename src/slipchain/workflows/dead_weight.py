@@ -52,6 +52,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
 TOL = 0.005  # the issue's resolution of mu_max
+BRACKET = "bracket"  # status of a realisation whose runs at lo or hi did not bracket mu_max
 
 
 class BracketError(ValueError):
@@ -72,12 +73,13 @@ class Evaluation:
 class MuMax:
     """mu_max of one realisation: the bracket [lo, hi] (lo steady, hi runaway) and its middle."""
 
-    status: str  # 'ok' (bracket narrower than 2*tol), 'no-steady' (an undecided run stopped it)
+    status: str  # 'ok' (bracket narrower than 2*tol), 'no-steady' (an undecided run stopped it), 'bracket' (lo/hi refuted)
     mu_max: float
     v_max: float  # steady velocity at lo, m/s
     lo: float
     hi: float
     evaluations: list[Evaluation] = field(default_factory=list)
+    message: str = ""  # why it is not 'ok'
 
 
 def evaluate(config: Config, mu_a: float, backend: str | BackendName = BackendName.CPU) -> Evaluation:
@@ -102,14 +104,16 @@ def mu_max(config: Config | Mapping[str, Any], *, lo: float = 0.3, hi: float = 1
 
 def mu_max_many(configs: list[Config], *, lo: float = 0.3, hi: float = 1.5, tol: float = TOL,
                 cache: str | os.PathLike | None = None, client: Any = None, n_workers: int | None = None,
-                backend: str | BackendName = BackendName.CPU) -> list[MuMax]:
+                backend: str | BackendName = BackendName.CPU, strict: bool = True) -> list[MuMax]:
     """:func:`mu_max` for many realisations at once, each round's runs as Dask tasks; the same
     results as one :func:`mu_max` per config. ``cache``: a directory keeping every evaluation
     (resume after an interruption); ``client``: an existing ``distributed.Client``, else a local
-    cluster of ``n_workers`` processes."""
+    cluster of ``n_workers`` processes. ``strict=False``: a refuted bracket marks that realisation
+    ``bracket`` instead of raising BracketError."""
     configs = [c if isinstance(c, Config) else make_config(dict(c)) for c in configs]
     with _client(client, n_workers) as c:
-        return _bisect(configs, lo, hi, tol, lambda jobs: evaluate_many(jobs, cache=cache, client=c, backend=backend))
+        return _bisect(configs, lo, hi, tol, lambda jobs: evaluate_many(jobs, cache=cache, client=c, backend=backend),
+                       strict)
 
 
 def evaluate_many(jobs: list[tuple[Config, float]], *, cache: str | os.PathLike | None = None, client: Any = None,
@@ -142,24 +146,30 @@ def _client(client: Any, n_workers: int | None):
 
 
 def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
-            evaluate_all: Callable[[list[tuple[Config, float]]], list[Evaluation]]) -> list[MuMax]:
-    """Bisection of every config in lock-step: ``evaluate_all`` gets one round's (config, mu_a) pairs."""
+            evaluate_all: Callable[[list[tuple[Config, float]]], list[Evaluation]], strict: bool = True) -> list[MuMax]:
+    """Bisection of every config in lock-step: ``evaluate_all`` gets one round's (config, mu_a) pairs.
+    ``strict``: a realisation whose lo/hi runs refute the bracket raises BracketError; else it gets
+    status ``bracket`` (its reason in ``message``) and the others go on."""
     if not (tol > 0 and 0 < lo < hi):
         raise ConfigError(f"mu_max needs 0 < lo < hi and tol > 0; got lo = {lo}, hi = {hi}, tol = {tol}")
     n = len(configs)
     ends = evaluate_all([(c, lo) for c in configs] + [(c, hi) for c in configs])
     evals = [[ends[i], ends[n + i]] for i in range(n)]
+    refuted: dict[int, str] = {}  # realisations whose runs at lo or hi did not bracket mu_max, and why
     for i in range(n):
         e_lo, e_hi = evals[i]
         if e_lo.velocity_status != VelocityStatus.OK:
-            raise BracketError(f"mu_max: lo = {lo} must give steady sliding; the run gave {e_lo.velocity_status} "
-                              f"({e_lo.message or 'no message'}) for seed {configs[i].seed}, theta {configs[i].theta}; "
-                              "expected a smaller lo or a longer t_total")
-        if e_hi.velocity_status != VelocityStatus.RUNAWAY:
-            raise BracketError(f"mu_max: hi = {hi} must run away; the run gave {e_hi.velocity_status} for seed "
-                              f"{configs[i].seed}, theta {configs[i].theta}; expected a larger hi")
+            refuted[i] = (f"mu_max: lo = {lo} must give steady sliding; the run gave {e_lo.velocity_status} "
+                          f"({e_lo.message or 'no message'}) for seed {configs[i].seed}, theta {configs[i].theta}; "
+                          "expected a smaller lo or a longer run (t_total, or t_max with t_decide)")
+        elif e_hi.velocity_status != VelocityStatus.RUNAWAY:
+            refuted[i] = (f"mu_max: hi = {hi} must run away; the run gave {e_hi.velocity_status} for seed "
+                          f"{configs[i].seed}, theta {configs[i].theta}; expected a larger hi")
+    if refuted and strict:
+        raise BracketError(refuted[min(refuted)])
     brackets = [[lo, hi, evals[i][0].velocity] for i in range(n)]
-    stopped: set[int] = set()  # an undecided (no-steady) run ended their bisection
+    stopped: set[int] = set(refuted)  # an undecided (no-steady) run ended their bisection
+    refuted_or_stopped_why = dict(refuted)
     while True:
         open_ = [i for i in range(n) if i not in stopped and brackets[i][1] - brackets[i][0] > 2 * tol]
         if not open_:
@@ -173,9 +183,12 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
                 brackets[i][1] = mid
             else:
                 stopped.add(i)
-    return [MuMax(str(VelocityStatus.NO_STEADY if i in stopped else VelocityStatus.OK),
+                refuted_or_stopped_why[i] = (f"undecided at mu_a = {mid:.6g} ({e.velocity_status}: "
+                                            f"{e.message or 'no message'}); bracket {brackets[i][0]:.6g}-{brackets[i][1]:.6g}")
+    return [MuMax(BRACKET if i in refuted else str(VelocityStatus.NO_STEADY if i in stopped else VelocityStatus.OK),
                   float("nan") if i in stopped else 0.5 * (brackets[i][0] + brackets[i][1]),
-                  brackets[i][2], brackets[i][0], brackets[i][1], evals[i]) for i in range(n)]
+                  float("nan") if i in refuted else brackets[i][2], brackets[i][0], brackets[i][1], evals[i],
+                  refuted_or_stopped_why.get(i, "")) for i in range(n)]
 
 
 def _cache_path(folder: Path, cfg: Config, mu_a: float) -> Path:
@@ -211,7 +224,7 @@ def _table(configs: list[Config], results: list[MuMax]) -> "pd.DataFrame":
     import pandas as pd
 
     return pd.DataFrame([{"theta": c.theta, "seed": c.seed, "status": r.status, "mu_max": r.mu_max, "lo": r.lo,
-                          "hi": r.hi, "v_max_m_s": r.v_max, "runs": len(r.evaluations)}
+                          "hi": r.hi, "v_max_m_s": r.v_max, "runs": len(r.evaluations), "message": r.message}
                          for c, r in zip(configs, results)])
 
 
@@ -352,7 +365,9 @@ def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, n_worker
              backend: str | BackendName = BackendName.CPU) -> PlanResult:
     """Run a plan: the bisections (:func:`mu_max_many`) and the ``curve`` points, every run cached in
     OUT/cache (a second call resumes), then write mu_max.csv, mu_max_summary.csv, evaluations.csv
-    and plan.toml into ``out`` (each file atomically). BracketError if lo/hi do not bracket."""
+    and plan.toml into ``out`` (each file atomically). A realisation whose lo/hi runs refute the
+    bracket has status ``bracket`` (with the reason) and the others go on; BracketError only when
+    every realisation's bracket is refuted (nothing to report)."""
     import pandas as pd
 
     from .tester import write_csv
@@ -361,10 +376,12 @@ def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, n_worker
     configs = plan.configs()
     with _client(client, n_workers) as c:
         results = mu_max_many(configs, lo=plan.lo, hi=plan.hi, tol=plan.tol, cache=out / "cache", client=c,
-                              backend=backend)
+                              backend=backend, strict=False)
         curve_jobs = [(plan.base.with_updates(theta=float(t), seed=0), float(m)) for t in plan.theta for m in plan.curve]
         curve = evaluate_many(curve_jobs, cache=out / "cache", client=c, backend=backend)
     table = _table(configs, results)
+    if all(r.status == BRACKET for r in results):
+        raise BracketError(results[0].message)
     evals = pd.concat([evaluations_table(configs, results),
                        pd.DataFrame([{"theta": cfg.theta, "seed": cfg.seed, "mu_a": e.mu_a,
                                       "velocity_status": e.velocity_status, "velocity_m_s": e.velocity,
@@ -397,7 +414,7 @@ def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float
     return float(f[i]), float(u[i])
 
 
-__all__ = ["PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "evaluate", "evaluate_many",
+__all__ = ["BRACKET", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "evaluate", "evaluate_many",
            "evaluations_table", "load_plan", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table", "plan_toml",
            "run_plan", "single_contact_maximum"]
 
