@@ -207,3 +207,16 @@ def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_pa
     bad = subprocess.run([sys.executable, "-m", "slipchain", "figure", "mu-max", "--from", str(tmp_path),
                           "--out", str(tmp_path / "z")], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "mu_max_summary.csv" in bad.stderr and not (tmp_path / "z").exists()
+
+
+def test_a_refuted_bracket_marks_that_realisation_and_the_others_go_on():
+    from slipchain.workflows.dead_weight import BRACKET, _bisect
+
+    # a run of 0.1 ms leaves 7 samples after the ramp: too few to call steady, so lo is refuted there
+    configs = [make_config(**{**IDENTICAL, "t_total": 1e-4}), make_config(**IDENTICAL)]
+    got = _bisect(configs, 0.5, 1.5, TOL, lambda jobs: [evaluate(c, m) for c, m in jobs], strict=False)
+    assert got[0].status == BRACKET and "lo = 0.5 must give steady sliding" in got[0].message
+    assert np.isnan(got[0].mu_max) and len(got[0].evaluations) == 2
+    assert got[1].status == "ok" and abs(got[1].mu_max - single_contact_maximum(configs[1])[0]) <= TOL
+    with pytest.raises(BracketError, match="lo = 0.5 must give steady sliding"):
+        _bisect(configs, 0.5, 1.5, TOL, lambda jobs: [evaluate(c, m) for c, m in jobs])
