@@ -1,0 +1,140 @@
+"""Quasi-static Fourier-space stiffness of an elastic slab on its bottom face (issue 13, first part).
+
+The 2-D interface of issue 13 is the bottom face z = 0 of an isotropic elastic slab (shear modulus
+``G``, Poisson ratio ``nu``) of thickness ``H = N_L a``. A tangential displacement along x,
+``u_x(x, y) = u_q exp(i q.r)``, with the blocks moving along x only (``u_y = 0``) and the normal
+stress free at the bottom face, needs the traction ``t_x = k(q) u_q`` with (the scalar model)::
+
+    k(q) = (qx/q)**2 k_PSV(q) + (qy/q)**2 k_SH(q)
+
+k_SH: the anti-plane (SH) part, displacement perpendicular to q; k_PSV: the in-plane (P-SV) part,
+displacement along q. With x = qH and the top **clamped** (u = 0 at z = H)::
+
+    k_SH  = G q coth(x)
+    k_PSV = G q [(3-4nu) cosh 2x + 2x**2 + 8nu**2 - 12nu + 5] / {(1-nu) [(3-4nu) sinh 2x + 2x]}
+
+(normal displacement also zero at the top). With the top held by the drive springs instead,
+``kappa_d = K_d / a**2`` per area on u_x(H) (the normal displacement still zero there)::
+
+    k_SH = G q (G q tanh x + kappa_d) / (G q + kappa_d tanh x),
+
+and k_PSV from the exact solution of the layer's boundary-value problem (:func:`k_psv_bvp`).
+Limits: q -> 0 gives ``G/H`` (clamped) and ``(H/G + 1/kappa_d)**-1`` (springs: the layer's shear
+in series with the springs); qH -> inf the half-space values ``G q/(1-nu)`` (PSV, normal stress
+free) and ``G q`` (SH), used above ``x = QH_HALFSPACE`` where the layer's correction,
+~ x**2 exp(-2x), is below 1e-15 (and sinh would overflow from x ~ 355 on). nu = 1/2 (rubber) is
+regular in every form here. A slider on a rigid base has twice the stiffness of a fault between
+two half-spaces (QDYN's ``fault_stress.f90`` uses ``G q / 2``).
+
+:func:`k_psv_bvp` integrates the plane-strain Navier equations across the layer in the
+variables ``y = (U, W, S, T)`` (u_x = i U e^{iqx}, u_z = W e^{iqx}, sigma_xz = i S e^{iqx},
+sigma_zz = T e^{iqx}), whose coefficients stay finite at nu = 1/2::
+
+    U' = -q W + S/G,              W' = nu/(1-nu) q U + (1-2nu)/(2G(1-nu)) T,
+    S' = 2G q**2 U/(1-nu) - nu/(1-nu) q T,     T' = q S,
+
+``y(H) = expm(A H) y(0)`` with U(0) = 1, T(0) = 0 and two conditions at the top; the stiffness is
+``-S(0)``. It reproduces the clamped closed form to 2e-13 for qH up to 25 and nu from 0 to 1/2
+(tests/unit/test_elastic.py): the closed forms above were checked against it, not copied.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+QH_HALFSPACE = 20.0  # above this qH the slab is a half-space to round-off
+
+
+def k_halfspace(q: ArrayLike, G: float, nu: float) -> tuple[np.ndarray, np.ndarray]:
+    """(k_PSV, k_SH) of a half-space with the normal stress free: G q/(1-nu), G q."""
+    q = np.asarray(q, float)
+    return G * q / (1.0 - nu), G * q
+
+
+def k_sh(q: ArrayLike, H: float, G: float, kappa_d: float | None = None) -> np.ndarray:
+    """Anti-plane stiffness of the slab (module docstring): top clamped, or on springs kappa_d per area."""
+    q = np.asarray(q, float)
+    x = q * H
+    small = x < 1e-12
+    xs = np.where(small, 1.0, np.minimum(x, QH_HALFSPACE))
+    t = np.tanh(xs)
+    Gq = G * q
+    if kappa_d is None:
+        k = Gq / t
+        k0 = G / H
+    else:
+        k = Gq * (Gq * t + kappa_d) / (Gq + kappa_d * t)
+        k0 = 1.0 / (H / G + 1.0 / kappa_d)
+    k = np.where(x > QH_HALFSPACE, Gq, k)
+    return np.where(small, k0, k)
+
+
+def k_psv(q: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None = None) -> np.ndarray:
+    """In-plane stiffness of the slab with the normal stress free (module docstring): the closed
+    form with the top clamped, the boundary-value problem with the top on springs."""
+    q = np.asarray(q, float)
+    x = q * H
+    small = x < 1e-12
+    far = x > QH_HALFSPACE
+    if kappa_d is None:
+        xs = np.where(small | far, 1.0, x)
+        num = (3 - 4 * nu) * np.cosh(2 * xs) + 2 * xs**2 + 8 * nu**2 - 12 * nu + 5
+        den = (1 - nu) * ((3 - 4 * nu) * np.sinh(2 * xs) + 2 * xs)
+        k = G * np.where(small | far, 1.0, q) * num / den
+        k0 = G / H
+    else:
+        mid = ~(small | far)
+        k = np.empty_like(q)
+        if mid.any():
+            k[mid] = k_psv_bvp(q[mid], H, G, nu, kappa_d)
+        k0 = 1.0 / (H / G + 1.0 / kappa_d)
+    k = np.where(far, G * q / (1 - nu), k)
+    return np.where(small, k0, k)
+
+
+def k_psv_bvp(q: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None = None) -> np.ndarray:
+    """k_PSV from the layer's boundary-value problem (module docstring), for qH up to ~25; top
+    clamped (``kappa_d`` None) or on tangential springs kappa_d per area, normal displacement zero."""
+    from scipy.linalg import expm
+
+    q = np.asarray(q, float)
+    A = np.zeros(q.shape + (4, 4))
+    c1, c2 = nu / (1 - nu), (1 - 2 * nu) / (2 * G * (1 - nu))
+    A[..., 0, 1], A[..., 0, 2] = -q, 1.0 / G
+    A[..., 1, 0], A[..., 1, 3] = c1 * q, c2
+    A[..., 2, 0], A[..., 2, 3] = 2 * G * q * q / (1 - nu), -c1 * q
+    A[..., 3, 2] = q
+    P = expm(A * H)  # y(H) = P y(0), y(0) = (1, W0, S0, 0)
+    r1 = P[..., 1, :]  # W(H) = 0
+    r2 = P[..., 0, :] if kappa_d is None else P[..., 2, :] + kappa_d * P[..., 0, :]  # U(H) = 0, or S(H) = -kappa_d U(H)
+    M = np.stack([np.stack([r1[..., 1], r1[..., 2]], -1), np.stack([r2[..., 1], r2[..., 2]], -1)], -2)
+    rhs = -np.stack([r1[..., 0], r2[..., 0]], -1)
+    sol = np.linalg.solve(M, rhs[..., None])[..., 0]
+    return -sol[..., 1]
+
+
+def _mix(qx: ArrayLike, qy: ArrayLike, kp: np.ndarray, ks: np.ndarray, k0: float) -> np.ndarray:
+    qx, qy = np.broadcast_arrays(np.asarray(qx, float), np.asarray(qy, float))
+    q2 = qx * qx + qy * qy
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = (qx * qx * kp + qy * qy * ks) / q2
+    return np.where(q2 > 0, k, k0)
+
+
+def slab_kernel(qx: ArrayLike, qy: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None = None) -> np.ndarray:
+    """k(qx, qy) of the slab (module docstring); at q = 0 the uniform shear, G/H or (H/G + 1/kappa_d)**-1."""
+    q = np.hypot(*np.broadcast_arrays(np.asarray(qx, float), np.asarray(qy, float)))
+    k0 = G / H if kappa_d is None else 1.0 / (H / G + 1.0 / kappa_d)
+    return _mix(qx, qy, k_psv(q, H, G, nu, kappa_d), k_sh(q, H, G, kappa_d), k0)
+
+
+def halfspace_kernel(qx: ArrayLike, qy: ArrayLike, G: float, nu: float, kappa_d: float) -> np.ndarray:
+    """The limit H -> inf: the half-space values, with k(0) = kappa_d (the drive springs alone hold
+    the uniform mode)."""
+    q = np.hypot(*np.broadcast_arrays(np.asarray(qx, float), np.asarray(qy, float)))
+    kp, ks = k_halfspace(q, G, nu)
+    return _mix(qx, qy, kp, ks, kappa_d)
+
+
+__all__ = ["QH_HALFSPACE", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]
