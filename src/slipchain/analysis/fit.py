@@ -32,7 +32,8 @@ kinds of residual:
   ``s_i**2 = mu_sem_i**2 + (dmu/dln v * v_sem_i / v_i)**2`` (velocity errors through the slope);
 * each pressure with both steady and runaway runs: the maximum lies between the largest steady mu
   and the smallest runaway mu; ``(m_obs - mu_max(p0)) / s`` with m_obs their midpoint and
-  ``s**2 = (gap/2)**2/3 + sem**2`` (uniform within the gap). Without a runaway a pressure bounds
+  ``s**2 = (gap/2)**2/3 + sem**2`` (uniform within the gap) plus the model's own error of
+  ``F g_max r`` (the seed scatter of its mu_max, interpolated like r). Without a runaway a pressure bounds
   the maximum from below only and gives no maximum residual.
 
 **Run-to-run scatter**: a real surface differs a little from run to run (the synthetic tester
@@ -107,6 +108,11 @@ class ModelMaxima:
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         lt = np.log10(np.clip(np.asarray(theta, float), 1e-300, None))
         return np.interp(lt, np.log10(self.theta), self.r)
+
+    def se(self, theta: np.ndarray) -> np.ndarray:
+        """The standard error of r, interpolated like r."""
+        lt = np.log10(np.clip(np.asarray(theta, float), 1e-300, None))
+        return np.interp(lt, np.log10(self.theta), self.r_se)
 
     def outside(self, theta: np.ndarray) -> np.ndarray:
         theta = np.asarray(theta, float)
@@ -233,9 +239,11 @@ def fit_group(runs: pd.DataFrame, maxima: ModelMaxima, group: tuple = ()) -> Fit
         s = np.sqrt(mu_sem**2 + (slope * v_sem / v) ** 2 + (scatter * mu) ** 2 + floor**2)
         r_steady = (mu - model) / s
         th = with_max["pressure_Pa"].to_numpy(float) / p_ref
-        mmod = F * g_max(delta, c) * maxima(th)
+        gm = F * g_max(delta, c)
+        mmod = gm * maxima(th)
         m_obs = with_max["m_obs"].to_numpy(float)
-        r_max = (m_obs - mmod) / np.hypot(with_max["m_obs_se"].to_numpy(float), scatter * m_obs)
+        s_max = np.sqrt(with_max["m_obs_se"].to_numpy(float) ** 2 + (scatter * m_obs) ** 2 + (gm * maxima.se(th)) ** 2)
+        r_max = (m_obs - mmod) / s_max
         return np.concatenate([r_steady, r_max])
 
     def scatter_for(q) -> float:
