@@ -24,8 +24,9 @@
 
 Steady points above the model's maximum cannot exist in the model; their residuals say so.
 
-**Least squares** (``scipy.optimize.least_squares``, trust-region reflective, bounds
-``theta = p0/p_ref <= 1`` at the largest pressure) in (F, log10 v0, delta, log10 p_ref) on two
+**Least squares** (``scipy.optimize.least_squares``, trust-region reflective; ``p_ref`` bounded
+so that every theta = p0/p_ref lies within the thetas the model was run at, or, when the
+pressures span more than those, so that theta <= 1) in (F, log10 v0, delta, log10 p_ref) on two
 kinds of residual:
 
 * each steady run: ``(mu_i - F g(v_i)) / s_i`` with the effective variance
@@ -255,11 +256,19 @@ def fit_group(runs: pd.DataFrame, maxima: ModelMaxima, group: tuple = ()) -> Fit
 
         return 0.0 if excess(0.0) <= 0 else optimize.brentq(excess, 0.0, 10.0, xtol=1e-6)
 
-    # start: F from the largest steady mu, v0 a little above its velocity, delta 0.5, p_ref = 2 p_max
+    # p_ref keeps every theta = p0/p_ref inside the thetas the model was run at, when their span allows
+    p_min = float(press["pressure_Pa"].min())
+    pr_lo, pr_hi = p_max / maxima.theta.max(), p_min / maxima.theta.min()
+    span_note = None
+    if not pr_hi > pr_lo * (1 + 1e-9):
+        pr_lo, pr_hi = p_max, p_max * 1e6
+        span_note = (f"the pressures span {p_max / p_min:.3g}x, more than the model's thetas "
+                     f"({maxima.theta.max() / maxima.theta.min():.3g}x): some thetas fall outside them")
+    lower = np.array([1e-6, math.log10(v.min()) - 6, 0.0, math.log10(pr_lo)])
+    upper = np.array([1e6, math.log10(v.max()) + 6, 10.0, math.log10(pr_hi)])
+    # start: F from the largest steady mu, v0 a little above its velocity, delta 0.5, p_ref mid-range
     top = int(np.argmax(mu))
-    q0 = np.array([mu[top] / g_max(0.5, c), math.log10(v[top]) + 0.3, 0.5, math.log10(2 * p_max)])
-    lower = np.array([1e-6, math.log10(v.min()) - 6, 0.0, math.log10(p_max)])
-    upper = np.array([1e6, math.log10(v.max()) + 6, 10.0, math.log10(p_max) + 6])
+    q0 = np.array([mu[top] / g_max(0.5, c), math.log10(v[top]) + 0.3, 0.5, 0.5 * (lower[3] + upper[3])])
     q0 = np.clip(q0, lower + 1e-9, upper - 1e-9)
     scatter = 0.0
     for _ in range(4):  # fit, then estimate the run-to-run scatter from the steady residuals, refit
@@ -296,14 +305,17 @@ def fit_group(runs: pd.DataFrame, maxima: ModelMaxima, group: tuple = ()) -> Fit
         if singular.min() < 1e-8 * singular.max() and abs(_null_weight(J, i)) > 0.5:
             se = math.inf
         x = sol.x[i]
+        lo_b = lower[i]  # an interval does not reach below the parameter's bound (delta >= 0)
         if name in LOG_PARAMS:
             params[name] = Estimate(10**x, 10**x * math.log(10) * se, 10 ** (x - tq * se), 10 ** (x + tq * se))
         else:
-            params[name] = Estimate(x, se, x - tq * se, x + tq * se)
+            params[name] = Estimate(x, se, max(x - tq * se, lo_b), x + tq * se)
     at_bound = [PARAMS[i] for i in range(k) if sol.active_mask[i] != 0]
     if at_bound:
-        notes.append(f"at a bound of its range: {', '.join(at_bound)} (theta = p0/p_ref <= 1 at the largest pressure "
-                     "bounds p_ref from below)")
+        notes.append(f"at a bound of its range: {', '.join(at_bound)} (p_ref is bounded so that every theta = p0/p_ref "
+                     f"lies within the model's thetas: {pr_lo / 1e3:.4g}-{pr_hi / 1e3:.4g} kPa)")
+    if span_note:
+        notes.append(span_note)
     F, v0, delta, p_ref = unpack(sol.x)
     theta = press["pressure_Pa"].to_numpy(float) / p_ref
     if maxima.outside(theta).any():
