@@ -144,7 +144,26 @@ def test_automatic_dead_weight_length_stops_at_t_max_with_no_steady_and_the_drif
     assert "still changes by" in a["velocity_reason"] and np.isnan(a["velocity"])
 
 
+def test_t_ramp_sets_the_ramp_and_equals_the_default_quarter():
+    from slipchain import run
+
+    cfg = make_config(**AUTO, dead_weight=0.7)
+    default = run(cfg, progress=False)
+    explicit = run(cfg.with_updates(t_ramp=0.25 * cfg.t_decide), progress=False)  # the same ramp, given
+    assert default.attrs["velocity"] == explicit.attrs["velocity"] and default.attrs["t_total"] == explicit.attrs["t_total"]
+    assert np.array_equal(default["X_mean"].values, explicit["X_mean"].values)
+    # a 4x slower ramp: the slider starts slower (a different run), and reaches the same steady velocity
+    slow = run(cfg.with_updates(t_ramp=cfg.t_decide * 0.9, t_max=0.1), progress=False)
+    early = slice(0, 20)  # the first 0.2 ms
+    assert slow["X_mean"].values[early].max() < default["X_mean"].values[early].max()
+    assert slow.attrs["velocity_status"] == "ok"
+    assert slow.attrs["velocity"] == pytest.approx(default.attrs["velocity"], rel=0.1)
+
+
 @pytest.mark.parametrize("extra, match", [
+    (dict(t_ramp=1e-3), "t_ramp.*spring drive"),
+    (dict(t_ramp=3e-3, t_decide=2e-3, dead_weight=0.5), "t_ramp.*shorter than t_decide"),
+    (dict(t_ramp=0.02, t_total=0.01, dead_weight=0.5), "t_ramp.*shorter than t_total"),
     (dict(t_decide=2e-3), "t_decide.*spring drive"),
     (dict(t_decide=2e-3, dead_weight=0.5, t_total=0.01), "t_decide.*t_total"),
     (dict(t_decide=0.5, dead_weight=0.5, t_max=0.25), "t_decide.*less than t_max"),
@@ -155,7 +174,7 @@ def test_t_decide_bad_combinations_are_clear_errors(extra, match):
         make_config(**{**IDENTICAL, "t_total": None, **extra})
 
 
-def test_t_decide_absent_leaves_member_ids_unchanged():
+def test_t_decide_and_t_ramp_absent_leave_member_ids_unchanged():
     from slipchain.sweeps.definition import member_id
 
     cfg = make_config(N=31, dead_weight=0.5, t_total=0.01)

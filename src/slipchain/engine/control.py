@@ -166,13 +166,17 @@ def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     (``t_total`` absent: until converged, at most ``t_max``), and the dead-weight ramp. Dead-weight
     runs have a fixed length (``t_total``, else ``t_max``; ramp over its first DEAD_WEIGHT_RAMP),
     or with ``t_decide`` the automatic length :class:`UntilDecided` (ramp over
-    DEAD_WEIGHT_RAMP*t_decide); their velocity is measured after the ramp."""
+    DEAD_WEIGHT_RAMP*t_decide); ``t_ramp``, if given, is the ramp's duration instead. Their
+    velocity is measured after the ramp."""
     c = system.config
     limit = max(1, int(round((c.t_total if c.t_total is not None else c.t_max) / interval)))
     dead_weight = c.dead_weight is not None
     auto = c.t_total is None and not dead_weight
     decide = dead_weight and c.t_decide is not None
-    n_ramp = max(1, int(round(DEAD_WEIGHT_RAMP * (c.t_decide / interval if decide else limit))))
+    if c.t_ramp is not None:
+        n_ramp = max(1, int(round(c.t_ramp / interval)))
+    else:
+        n_ramp = max(1, int(round(DEAD_WEIGHT_RAMP * (c.t_decide / interval if decide else limit))))
     return RowControl(
         limit=limit,
         converge=UntilConverged(system, x0_mean, interval) if auto else None,

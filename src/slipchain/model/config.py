@@ -39,6 +39,7 @@ ALLOWED: dict[str, str] = {
     "t_total": "a number > 0 (s), or absent for an automatic run length",
     "t_max": "a number > 0 (s)",
     "t_decide": "a number > 0 (s), less than t_max, only with dead_weight and without t_total; or absent",
+    "t_ramp": "a number > 0 (s), only with dead_weight, shorter than t_decide (else than the run); or absent",
     "sem_target": "a number > 0",
     "output_interval": "a number > 0 (s), at least dt",
     "seed": "an integer >= 0",
@@ -74,7 +75,10 @@ class Config(BaseModel):
     ``t_decide`` (dead-weight drive only, with ``t_total`` absent): the dead-weight automatic
     length: the force ramps up over DEAD_WEIGHT_RAMP*t_decide, the velocity is first classified at
     t_decide, and the run goes on while it still drifts (neither steady nor beyond the rising
-    branch), at most ``t_max`` (:class:`slipchain.engine.control.UntilDecided`);
+    branch), at most ``t_max`` (:class:`slipchain.engine.control.UntilDecided`); ``t_ramp``
+    (dead weight only): the duration of the force's linear ramp instead of a quarter of
+    ``t_decide`` (or of the run). The ramp must be slow against the creep relaxation, or the
+    slider overshoots past the maximum (docs/guide/mechanism.md);
     ``output_interval`` sampling interval of f_d(t) (each sample is the average over the
     interval); ``seed`` for the disorder. Where a run is executed (CPU or GPU) is not part of the
     config: it is an argument of :func:`slipchain.run` and the CLI's ``--backend``.
@@ -104,6 +108,7 @@ class Config(BaseModel):
     t_total: float | None = Field(None, gt=0)
     t_max: float = Field(0.25, gt=0)
     t_decide: float | None = Field(None, gt=0)
+    t_ramp: float | None = Field(None, gt=0)
     sem_target: float = Field(0.01, gt=0)
     output_interval: float = Field(1e-5, gt=0)
     seed: int = Field(0, ge=0)
@@ -135,6 +140,15 @@ class Config(BaseModel):
             if self.t_decide < 100 * self.output_interval:
                 raise ValueError(_message("t_decide", self.t_decide, "at least 100 output intervals (the velocity is "
                                           f"fitted to the samples after the ramp): {100 * self.output_interval:g} s"))
+        if self.t_ramp is not None:
+            if self.dead_weight is None:
+                raise ValueError(_message("t_ramp", self.t_ramp, "absent with the spring drive (it is the dead-weight "
+                                          "force's ramp; give dead_weight = mu_a)"))
+            end, name = ((self.t_decide, "t_decide") if self.t_decide is not None else
+                         (self.t_total, "t_total") if self.t_total is not None else (self.t_max, "t_max"))
+            if not self.t_ramp < end:
+                raise ValueError(_message("t_ramp", self.t_ramp, f"shorter than {name} = {end:g} (the velocity is "
+                                          "measured after the ramp)"))
         dt_max = self.dt_unique_root_limit
         if self.dt >= dt_max:
             raise ValueError(

@@ -270,9 +270,11 @@ def _var_attrs(e: Entry) -> dict[str, str]:
 
 def after_ramp(cfg, time: np.ndarray) -> np.ndarray:
     """The samples after the dead-weight force ramp, where the velocity is measured: after
-    DEAD_WEIGHT_RAMP of the run (fixed length) or of ``t_decide`` (automatic length)."""
+    DEAD_WEIGHT_RAMP of the run (fixed length) or of ``t_decide`` (automatic length), or ``t_ramp``."""
     if not time.size:
         return np.zeros(0, bool)
+    if cfg.t_ramp is not None:
+        return time > cfg.t_ramp
     return time > DEAD_WEIGHT_RAMP * (time[-1] if cfg.t_decide is None else cfg.t_decide)
 
 

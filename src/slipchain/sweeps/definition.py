@@ -74,7 +74,7 @@ class Member:
 
 # Options added after 0.1.0 whose absent value (None) switches a feature off: left out of the hash
 # while off, so stores written before the option existed stay valid.
-OPTIONAL_FEATURES = ("dead_weight", "t_decide")  # absent (None): left out of the hashed text
+OPTIONAL_FEATURES = ("dead_weight", "t_decide", "t_ramp")  # absent (None): left out of the hashed text
 
 
 def member_id(config: Config) -> str:

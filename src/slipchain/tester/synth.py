@@ -173,8 +173,8 @@ def write_synthetic(out: str | os.PathLike, setup: SynthSetup = SynthSetup()) ->
     law = "\n".join(f"  {f.name} = {getattr(setup.law, f.name)}" for f in fields(setup.law) if f.name != "r")
     if hasattr(setup.law, "r"):  # analysis.fit.ModelLaw: its lowering of the maximum
         law += (f"\n  r(theta): the model's lowering of the maximum from {setup.law.r.source or 'a table'} "
-                f"(theta {list(np.round(setup.law.r.theta, 4))}, r {list(np.round(setup.law.r.r, 4))})")
-    paths["readme"].write_text(f"{NOTICE}\n\nLaw (slipchain.tester.synth.{type(setup.law).__name__}):\n{law}\n\nSet-up:\n{params}\n\n"
+                f"(theta {[round(float(t), 4) for t in setup.law.r.theta]}, r {[round(float(r), 4) for r in setup.law.r.r]})")
+    paths["readme"].write_text(f"{NOTICE}\n\nLaw ({type(setup.law).__module__}.{type(setup.law).__name__}):\n{law}\n\nSet-up:\n{params}\n\n"
                                "truth.csv holds the planted velocity and mu of every run.\n")
     return paths
 
