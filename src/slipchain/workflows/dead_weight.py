@@ -86,8 +86,11 @@ def evaluate(config: Config, mu_a: float, backend: str | BackendName = BackendNa
     """One dead-weight run at applied ``mu_a`` and the tester's classification of its velocity."""
     ds = run(config.with_updates(dead_weight=float(mu_a)), backend=backend, progress=False)
     a = ds.attrs
-    return Evaluation(float(mu_a), str(a.get("velocity_status", VelocityStatus.NO_STEADY)),
-                      float(a.get("velocity", np.nan)), str(a.get("message", "")))
+    status = str(a.get("velocity_status", VelocityStatus.NO_STEADY))
+    message = str(a.get("message", ""))
+    if status == VelocityStatus.NO_STEADY and a.get("velocity_reason"):  # say why it is undecided
+        message = "; ".join(m for m in (message, str(a["velocity_reason"])) if m)
+    return Evaluation(float(mu_a), status, float(a.get("velocity", np.nan)), message)
 
 
 def mu_max(config: Config | Mapping[str, Any], *, lo: float = 0.3, hi: float = 1.5, tol: float = TOL,
@@ -470,8 +473,10 @@ def mu_max_report(summary: "pd.DataFrame", table: "pd.DataFrame", spring: "pd.Da
                      f"{r.ratio_to_theta_min:.4f} ± {r.ratio_se:.4f} | {r.v_max_m_s:.3g} |")
     undecided = table[table["status"] != "ok"]
     if len(undecided):
-        lines += ["", "Undecided (no-steady) realisations: " + ", ".join(
-            f"theta {r.theta:g} seed {r.seed} (bracket {r.lo:.4g}-{r.hi:.4g})" for r in undecided.itertuples())]
+        lines += ["", "Not decided (left out of the means):", ""]
+        lines += [f"- theta {r.theta:g}, seed {r.seed}: {r.status} (bracket {r.lo:.4g}-{r.hi:.4g})"
+                  + (f": {r.message}" if isinstance(getattr(r, "message", ""), str) and r.message else "")
+                  for r in undecided.itertuples()]
     lo, hi = summary.iloc[0], summary.iloc[-1]
     fall = 1 - hi["ratio_to_theta_min"]
     lines += ["", f"From theta = {lo['theta']:g} to {hi['theta']:g} the dead-weight maximum changes by "
