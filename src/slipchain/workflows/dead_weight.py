@@ -253,11 +253,15 @@ def mu_max_summary(table: "pd.DataFrame") -> "pd.DataFrame":
 
 def evaluations_table(configs: list[Config], results: list[MuMax]) -> "pd.DataFrame":
     """Every dead-weight run of the bisections: theta, seed, applied mu_a, status, velocity (m/s)."""
+    return _evaluation_rows([(c, e) for c, r in zip(configs, results) for e in r.evaluations], "bisection")
+
+
+def _evaluation_rows(pairs: list[tuple[Config, Evaluation]], source: str) -> "pd.DataFrame":
     import pandas as pd
 
     return pd.DataFrame([{"theta": c.theta, "seed": c.seed, "mu_a": e.mu_a, "velocity_status": e.velocity_status,
-                          "velocity_m_s": e.velocity, "source": "bisection"}
-                         for c, r in zip(configs, results) for e in r.evaluations])
+                          "velocity_m_s": e.velocity, "source": source} for c, e in pairs],
+                        columns=["theta", "seed", "mu_a", "velocity_status", "velocity_m_s", "source"])
 
 
 # --- a mu-max plan: the base config and the bisection's settings in one TOML file ------------------
@@ -386,10 +390,7 @@ def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, n_worker
     if all(r.status == BRACKET for r in results):
         raise BracketError(results[0].message)
     evals = pd.concat([evaluations_table(configs, results),
-                       pd.DataFrame([{"theta": cfg.theta, "seed": cfg.seed, "mu_a": e.mu_a,
-                                      "velocity_status": e.velocity_status, "velocity_m_s": e.velocity,
-                                      "source": "curve"} for (cfg, _), e in zip(curve_jobs, curve)],
-                                    columns=["theta", "seed", "mu_a", "velocity_status", "velocity_m_s", "source"])],
+                       _evaluation_rows([(cfg, e) for (cfg, _), e in zip(curve_jobs, curve)], "curve")],
                       ignore_index=True)
     result = PlanResult(table, mu_max_summary(table), evals)
     write_csv(result.table, out / "mu_max.csv")
