@@ -104,3 +104,27 @@ def test_kernel_combines_the_two_modes_by_direction():
     kh = halfspace_kernel(qx, qy, G, 0.5, KAPPA)
     assert kh[0, 0] == KAPPA and kh[3, 0] == pytest.approx(G * abs(qx[3, 0]) / 0.5)
     assert kh[0, 3] == pytest.approx(G * qy[0, 3])
+
+
+def test_elastic_force_of_single_modes_and_of_a_uniform_shift():
+    from slipchain.model.elastic import elastic_force, wavenumbers
+
+    a, Lx, Ly = 1e-4, 16, 8
+    qx, qy = wavenumbers(Lx, Ly, a)
+    k = slab_kernel(qx, qy, H, G, 0.5, KAPPA)
+    i, j = np.meshgrid(np.arange(Lx), np.arange(Ly), indexing="ij")
+    # a uniform displacement against the drive: every block feels -a^2 k(0) (u - X)
+    f = elastic_force(np.full((Lx, Ly), 3e-9), 1e-9, k, a)
+    assert np.allclose(f, -a * a * k[0, 0] * 2e-9, rtol=1e-12, atol=0)
+    # a single Fourier mode cos(qx x + qy y) is an eigenfunction: the force is -a^2 k(q) times it
+    for mx, my in ((1, 0), (0, 2), (3, 1), (Lx // 2, 0)):
+        u = 1e-9 * np.cos(2 * np.pi * (mx * i / Lx + my * j / Ly))
+        kq = float(slab_kernel(2 * np.pi * mx / (Lx * a), 2 * np.pi * my / (Ly * a), H, G, 0.5, KAPPA))
+        f = elastic_force(u, 0.0, k, a)
+        assert np.max(np.abs(f + a * a * kq * u)) <= 1e-12 * np.max(np.abs(f))
+    # linear, and the net force is that of the mean displacement alone (k(0))
+    rng = np.random.default_rng(0)
+    u1, u2 = rng.normal(size=(2, Lx, Ly)) * 1e-9
+    f1, f2 = elastic_force(u1, 0.0, k, a), elastic_force(u2, 0.0, k, a)
+    assert np.max(np.abs(elastic_force(u1 + 2 * u2, 0.0, k, a) - (f1 + 2 * f2))) <= 1e-12 * np.max(np.abs(f1))
+    assert f1.sum() == pytest.approx(-a * a * k[0, 0] * u1.sum(), rel=1e-10)

@@ -137,4 +137,26 @@ def halfspace_kernel(qx: ArrayLike, qy: ArrayLike, G: float, nu: float, kappa_d:
     return _mix(qx, qy, kp, ks, kappa_d)
 
 
-__all__ = ["QH_HALFSPACE", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]
+def wavenumbers(Lx: int, Ly: int, a: float) -> tuple[np.ndarray, np.ndarray]:
+    """(qx, qy) on the grid of ``rfft2`` of an (Lx, Ly) periodic field of spacing a (1/m), shapes
+    (Lx, Ly//2 + 1): the full axis first, the half axis last."""
+    qx = 2 * np.pi * np.fft.fftfreq(Lx, a)
+    qy = 2 * np.pi * np.fft.rfftfreq(Ly, a)
+    return np.meshgrid(qx, qy, indexing="ij")
+
+
+def elastic_force(u: np.ndarray, X: float | np.ndarray, k_half: np.ndarray, a: float, xp=None, fft=None) -> np.ndarray:
+    """The slab's force on the interface blocks, ``-a**2 IFFT[k(q) FFT(u - X)]`` (N), for an (Lx, Ly)
+    periodic field ``u`` of block displacements and the drive's displacement ``X`` (scalar or
+    field); ``k_half`` is k on the rfft2 grid (:func:`wavenumbers`). One rfft2/irfft2 pair.
+    ``xp``/``fft``: the array namespace and its FFT module (numpy and scipy.fft by default; CuPy
+    and cupyx.scipy.fft run the same code on a GPU)."""
+    if xp is None:
+        xp = np
+    if fft is None:
+        import scipy.fft as fft
+    d = u - X
+    return -(a * a) * fft.irfft2(k_half * fft.rfft2(d), s=d.shape)
+
+
+__all__ = ["QH_HALFSPACE", "elastic_force", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]
