@@ -105,7 +105,15 @@ def test_cli_synth_analyze_fit_recovers_the_truth_and_bad_input_exits_2(tmp_path
     runs = tmp_path / "a" / "runs.csv"
     cut = tmp_path / "cut.csv"
     pd.read_csv(runs).drop(columns=["velocity_sem_m_s"]).to_csv(cut, index=False)
+    text_model = _model_dir(tmp_path / "text")
+    (text_model / "mu_max_summary.csv").write_text("theta,mu_max,mu_max_se\n0.1,high,0.01\n1,0.9,0.01\n")
+    texty = tmp_path / "texty.csv"
+    t = pd.read_csv(runs, dtype=str)
+    t.loc[2, "mu"] = "abc"
+    t.to_csv(texty, index=False)
     for args, words in (((runs, "--model", one_theta), "at least 2"),
+                        ((runs, "--model", text_model), "column 'mu_max' has 'high' in data row 1"),
+                        ((texty, "--model", model), "column 'mu' has 'abc' in data row 3"),
                         ((runs, "--model", tmp_path), "mu_max_summary.csv"),
                         ((cut, "--model", model), "velocity_sem_m_s"),
                         ((tmp_path / "none.csv", "--model", model), "none.csv")):

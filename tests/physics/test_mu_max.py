@@ -223,6 +223,13 @@ def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_pa
     plan.write_text(plan.read_text().replace("seeds = 2", "seedz = 2"))
     bad = subprocess.run([*cmd[:-1], str(tmp_path / "y")], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "seedz" in bad.stderr and not (tmp_path / "y").exists()
+    good = plan.read_text().replace("seedz = 2", "seeds = 2")
+    for body, words in ((good.replace("seeds = 2", "seeds = 1.5"), "'seeds' has value 1.5"),
+                        (good.replace("seeds = 2", "seeds = true"), "'seeds' has value True"),
+                        ("[bass]\nN = 3\n" + good, "unknown table(s)/key(s) ['bass']")):
+        plan.write_text(body)
+        bad = subprocess.run([*cmd[:-1], str(tmp_path / "y")], capture_output=True, text=True, timeout=120)
+        assert bad.returncode == 2 and words in bad.stderr and not (tmp_path / "y").exists(), bad.stderr
     bad = subprocess.run([sys.executable, "-m", "slipchain", "figure", "mu-max", "--from", str(tmp_path),
                           "--out", str(tmp_path / "z")], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "mu_max_summary.csv" in bad.stderr and not (tmp_path / "z").exists()

@@ -130,11 +130,18 @@ def model_maxima(path: str | os.PathLike) -> ModelMaxima:
         if not f.is_file():
             raise FitError(f"model {str(folder)!r} has no {f.name}; expected the output directory of "
                            "`slipchain mu-max` (mu_max_summary.csv and plan.toml)")
-    table = pd.read_csv(summary_csv)
+    try:
+        table = pd.read_csv(summary_csv)
+    except (OSError, ValueError) as e:
+        raise FitError(f"{str(summary_csv)!r} cannot be read: {e}") from None
     missing = [c for c in ("theta", "mu_max", "mu_max_se") if c not in table.columns]
     if missing:
         raise FitError(f"{str(summary_csv)!r} lacks column(s) {missing}; expected a mu_max_summary.csv of `slipchain mu-max`")
+    table = _numeric(table, ("theta", "mu_max", "mu_max_se"), str(summary_csv))
     table = table[np.isfinite(table["mu_max"])].sort_values("theta")
+    if ((table["theta"] <= 0) | (table["theta"] > 1)).any() or (table["mu_max"] <= 0).any():
+        raise FitError(f"{str(summary_csv)!r} has theta outside (0, 1] or mu_max <= 0; expected a mu_max_summary.csv "
+                       "of `slipchain mu-max`")
     if table["theta"].nunique() < 2:
         raise FitError(f"{str(summary_csv)!r} has mu_max at {table['theta'].nunique()} theta value(s); the load "
                        "dependence needs at least 2 (run `slipchain mu-max` with several --theta)")
@@ -145,6 +152,19 @@ def model_maxima(path: str | os.PathLike) -> ModelMaxima:
     gm = g_max(base.delta, base.c)
     return ModelMaxima(table["theta"].to_numpy(float), table["mu_max"].to_numpy(float) / gm,
                        table["mu_max_se"].to_numpy(float) / gm, base.c, str(folder))
+
+
+def _numeric(table: pd.DataFrame, columns, source: str) -> pd.DataFrame:
+    """The columns as numbers; FitError naming the first cell that is not one (empty cells stay NaN)."""
+    table = table.copy()
+    for col in columns:
+        num = pd.to_numeric(table[col], errors="coerce")
+        bad = table[col].notna() & num.isna()
+        if bad.any():
+            i = int(np.flatnonzero(bad.to_numpy())[0])
+            raise FitError(f"{source}: column {col!r} has {table[col].iloc[i]!r} in data row {i + 1}; expected a number")
+        table[col] = num.astype(float)
+    return table
 
 
 @dataclass
@@ -375,7 +395,9 @@ def fit_runs(runs: pd.DataFrame, maxima: ModelMaxima) -> list[FitResult]:
     missing = [c for c in need if c not in runs.columns]
     if missing:
         raise FitError(f"the runs table lacks column(s) {missing}; expected the runs.csv of `slipchain tester analyze`")
-    usable = runs[runs["status"].isin([OK, RUNAWAY])]
+    runs = _numeric(runs, ["pressure_Pa", "velocity_m_s", "velocity_sem_m_s", "mu", "mu_sem"], "the runs table")
+    usable = runs[runs["status"].isin([OK, RUNAWAY]) & np.isfinite(runs["pressure_Pa"]) & (runs["pressure_Pa"] > 0)
+                  & np.isfinite(runs["mu"])]
     if usable.empty:
         raise FitError("the runs table has no steady or runaway run; nothing to fit")
     return [fit_group(grp, maxima, key if isinstance(key, tuple) else (key,))

@@ -320,8 +320,9 @@ def load_plan(path: str | os.PathLike | None, overrides: list[str] = (), **setti
     from ..model.config import parse_override, read_toml
 
     data = read_toml(path) if path is not None else {}
-    base = dict(data.get("base", data if "bisection" not in data else {}))
-    if "base" in data:
+    is_plan = "base" in data or "bisection" in data
+    base = dict(data.get("base", {})) if is_plan else dict(data)
+    if is_plan:
         extra = sorted(set(data) - {"base", "bisection", "name"})
         if extra:
             raise ConfigError(f"mu-max plan {str(path)!r} has unknown table(s)/key(s) {extra}; expected [base], "
@@ -337,28 +338,24 @@ def load_plan(path: str | os.PathLike | None, overrides: list[str] = (), **setti
     for key, value in settings.items():
         if value is not None:
             bisection[key] = value
-    try:
-        kw = {k: (tuple(float(x) for x in v) if k in ("theta", "curve") else int(v) if k == "seeds" else float(v))
-              for k, v in bisection.items()}
-    except (TypeError, ValueError) as e:
-        key = next(k for k in bisection if not _convertible(k, bisection[k]))
-        raise ConfigError(f"mu-max key '{key}' has value {bisection[key]!r}; expected {PLAN_KEYS[key]}") from e
+    bad = next((k for k in bisection if not _convertible(k, bisection[k])), None)
+    if bad is not None:
+        raise ConfigError(f"mu-max key '{bad}' has value {bisection[bad]!r}; expected {PLAN_KEYS[bad]}")
+    kw = {k: (tuple(float(x) for x in v) if k in ("theta", "curve") else int(v) if k == "seeds" else float(v))
+          for k, v in bisection.items()}
     return Plan(make_config(base), name=str(data.get("name", "mu-max")), **kw).check()
 
 
 def _convertible(key: str, value: Any) -> bool:
-    try:
-        if key in ("theta", "curve"):
-            [float(x) for x in value]
-        elif key == "seeds":
-            if isinstance(value, float) and not value.is_integer():
-                return False
-            int(value)
-        else:
-            float(value)
-        return True
-    except (TypeError, ValueError):
-        return False
+    """Whether a [bisection] value has the type PLAN_KEYS says (TOML or CLI; no booleans, no strings)."""
+    def number(x: Any) -> bool:
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+    if key in ("theta", "curve"):
+        return isinstance(value, (list, tuple)) and all(number(x) for x in value)
+    if key == "seeds":
+        return number(value) and float(value).is_integer()
+    return number(value)
 
 
 @dataclass
