@@ -145,14 +145,12 @@ def wavenumbers(Lx: int, Ly: int, a: float) -> tuple[np.ndarray, np.ndarray]:
     return np.meshgrid(qx, qy, indexing="ij")
 
 
-def elastic_force(u: np.ndarray, X: float | np.ndarray, k_half: np.ndarray, a: float, xp=None, fft=None) -> np.ndarray:
+def elastic_force(u: np.ndarray, X: float | np.ndarray, k_half: np.ndarray, a: float, fft=None) -> np.ndarray:
     """The slab's force on the interface blocks, ``-a**2 IFFT[k(q) FFT(u - X)]`` (N), for an (Lx, Ly)
     periodic field ``u`` of block displacements and the drive's displacement ``X`` (scalar or
     field); ``k_half`` is k on the rfft2 grid (:func:`wavenumbers`). One rfft2/irfft2 pair.
-    ``xp``/``fft``: the array namespace and its FFT module (numpy and scipy.fft by default; CuPy
-    and cupyx.scipy.fft run the same code on a GPU)."""
-    if xp is None:
-        xp = np
+    ``fft``: the FFT module of the arrays' namespace (scipy.fft by default; with CuPy arrays and
+    cupyx.scipy.fft the same code runs on a GPU)."""
     if fft is None:
         import scipy.fft as fft
     d = u - X
