@@ -147,6 +147,26 @@ def _csv(rows) -> str:
     return buf.getvalue()
 
 
+PLAN_BASE = {"N": 11, "delta": 0.0, "t_decide": 0.01, "t_max": 0.1}
+PLAN_BISECTION = {"theta": [0.5, 1.0], "seeds": 2, "lo": 0.5, "hi": 1.5, "tol": 0.005, "curve": [0.3]}
+
+
+@st.composite
+def mutated_plan(draw) -> str:
+    """A mu-max plan ([base] and [bisection]) with keys removed, added or given odd values."""
+    base, bisection = dict(PLAN_BASE), dict(PLAN_BISECTION)
+    for k in draw(st.lists(st.sampled_from(list(PLAN_BASE)), max_size=2)):
+        base.pop(k, None)
+    for k in draw(st.lists(st.sampled_from(list(PLAN_BISECTION)), max_size=2)):
+        bisection.pop(k, None)
+    base.update(draw(st.dictionaries(KEY, VALUE, max_size=2)))
+    bisection.update(draw(st.dictionaries(st.one_of(st.sampled_from(list(PLAN_BISECTION)), TEXT), VALUE, max_size=2)))
+    text = f"name = {toml_value(draw(TEXT))}\n" if draw(st.booleans()) else ""
+    if draw(st.floats(0, 1)) < 0.1:
+        text += f"{toml_key(draw(TEXT) or 'x')} = {toml_value(draw(SCALAR))}\n"  # an unknown top-level key
+    return text + "[base]\n" + toml_table(base) + "[bisection]\n" + toml_table(bisection)
+
+
 # --- helpers ----------------------------------------------------------------------------------------
 
 
@@ -224,6 +244,27 @@ def test_fuzzed_sweep_toml_is_accepted_or_rejected_with_exit_2(text):
         assert dry.exit_code == 0 and f"{len(sw.members)} members" in dry.output, (dry.output, dry.stderr, dry.exception)
         assert not store.exists()
         event("sweep accepted")
+
+
+@FUZZ
+@given(mutated_plan())
+def test_fuzzed_mu_max_plan_is_accepted_or_rejected_with_exit_2(text):
+    from slipchain.workflows.dead_weight import Plan, load_plan
+
+    with _workdir() as work:
+        path = work / "p.toml"
+        path.write_text(text)
+        out = work / "out"
+        try:
+            plan = load_plan(path)
+        except ConfigError:
+            event("plan rejected")
+            _rejected(runner.invoke(app, ["mu-max", str(path), "--out", str(out)]), out)
+            return
+        # accepted: every setting has its type and range (running the bisections is tested elsewhere)
+        assert isinstance(plan, Plan) and plan.seeds >= 1 and 0 < plan.lo < plan.hi and plan.tol > 0
+        assert all(0 < t <= 1 for t in plan.theta) and all(m > 0 for m in plan.curve)
+        event("plan accepted")
 
 
 @settings(max_examples=max(1, EXAMPLES * 2 // 3), deadline=None, suppress_health_check=[HealthCheck.too_slow])
