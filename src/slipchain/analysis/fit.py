@@ -64,6 +64,7 @@ import pandas as pd
 from scipy import optimize, special, stats
 
 from ..tester.analysis import GROUP, OK, RUNAWAY, pressure_group
+from .statistics import ratio
 
 CONFIDENCE = 0.95
 PARAMS = ("F", "v0", "delta", "p_ref")
@@ -190,14 +191,13 @@ class FitResult:
     fall_observed: Estimate
     converged: bool
     message: str
+    maxima: ModelMaxima  # the model's maxima it was fitted with
     notes: list[str] = field(default_factory=list)
 
     def curve(self, p0: float, v: np.ndarray) -> tuple[np.ndarray, float, float]:
         """The fitted model at pressure p0: mu on ``v`` (NaN past the maximum), and (v_max, mu_max)."""
         F, v0, delta, p_ref = (self.params[k].value for k in PARAMS)
-        return _curve(F, v0, delta, p_ref, p0, v, self._maxima)
-
-    _maxima: ModelMaxima | None = None
+        return _curve(F, v0, delta, p_ref, p0, v, self.maxima)
 
 
 def _curve(F, v0, delta, p_ref, p0, v, maxima: ModelMaxima):
@@ -313,16 +313,18 @@ def fit_group(runs: pd.DataFrame, maxima: ModelMaxima, group: tuple = ()) -> Fit
     scale = max(chi2 / dof, 1.0)
     J = sol.jac
     cov = np.linalg.pinv(J.T @ J) * scale
-    # a direction the data do not fix (flat r, or a parameter at its bound) has a huge or zero variance
-    singular = np.linalg.svd(J, compute_uv=False)
+    # a direction the data do not fix (flat r, or a parameter at its bound): the parameters that take
+    # part in the least determined direction (its right singular vector) get an infinite error
+    _, singular, vt = np.linalg.svd(J, full_matrices=False)
+    undetermined = singular.min() < 1e-8 * singular.max()
     notes = []
-    if singular.min() < 1e-8 * singular.max():
+    if undetermined:
         notes.append("the data do not determine every parameter (near-singular Jacobian): see the infinite errors")
     tq = stats.t.ppf(0.5 + CONFIDENCE / 2, dof)
     params: dict[str, Estimate] = {}
     for i, name in enumerate(PARAMS):
         se = math.sqrt(cov[i, i]) if cov[i, i] > 0 else 0.0
-        if singular.min() < 1e-8 * singular.max() and abs(_null_weight(J, i)) > 0.5:
+        if undetermined and abs(vt[-1, i]) > 0.5:
             se = math.inf
         x = sol.x[i]
         lo_b = lower[i]  # an interval does not reach below the parameter's bound (delta >= 0)
@@ -343,15 +345,13 @@ def fit_group(runs: pd.DataFrame, maxima: ModelMaxima, group: tuple = ()) -> Fit
         notes.append(f"theta = {out} outside the model's thetas [{maxima.theta.min():g}, {maxima.theta.max():g}]: r held "
                      "at its end value there")
     # per pressure: residuals of its steady runs, the observed and fitted maxima
-    rsteady = res[: len(steady)]
-    pg = steady["pressure_group_Pa"].to_numpy(float)
+    by_pressure = pd.Series(res[: len(steady)]).groupby(steady["pressure_group_Pa"].to_numpy(float))
+    groups = press["pressure_Pa"].map(pressure_group)
     press = press.assign(
         theta=theta,
         mu_max_fitted=F * g_max(delta, c) * maxima(theta),
-        steady_residual_mean=[float(rsteady[pg == pressure_group(p)].mean()) if (pg == pressure_group(p)).any()
-                              else np.nan for p in press["pressure_Pa"]],
-        steady_residual_rms=[float(np.sqrt((rsteady[pg == pressure_group(p)] ** 2).mean()))
-                             if (pg == pressure_group(p)).any() else np.nan for p in press["pressure_Pa"]],
+        steady_residual_mean=groups.map(by_pressure.apply(lambda r: float(r.to_numpy().mean()))).to_numpy(float),
+        steady_residual_rms=groups.map(by_pressure.apply(lambda r: float(np.sqrt((r.to_numpy() ** 2).mean())))).to_numpy(float),
     )
     press["max_residual"] = (press["m_obs"] - press["mu_max_fitted"]) / press["m_obs_se"]
     # the fall of the maximum from the smallest to the largest pressure: fitted (delta method) and observed
@@ -366,26 +366,16 @@ def fit_group(runs: pd.DataFrame, maxima: ModelMaxima, group: tuple = ()) -> Fit
     f_fit = fall(sol.x)
     fitted = Estimate(f_fit, se_fall, f_fit - tq * se_fall, f_fit + tq * se_fall)
     observed = _observed_fall(press, tq)
-    result = FitResult(group, params, chi2, dof, scale, scatter, press, fitted, observed, bool(sol.success), sol.message,
-                       notes)
-    result._maxima = maxima
-    return result
-
-
-def _null_weight(J: np.ndarray, i: int) -> float:
-    """How much parameter i takes part in the least determined direction (its right singular vector)."""
-    _, _, vt = np.linalg.svd(J, full_matrices=False)
-    return float(vt[-1, i])
+    return FitResult(group, params, chi2, dof, scale, scatter, press, fitted, observed, bool(sol.success), sol.message,
+                     maxima, notes)
 
 
 def _observed_fall(press: pd.DataFrame, tq: float) -> Estimate:
     lo, hi = press.iloc[0], press.iloc[-1]
     m_lo = lo["m_obs"] if np.isfinite(lo["m_obs"]) else lo["mu_steady_max"]
     m_hi = hi["m_obs"] if np.isfinite(hi["m_obs"]) else hi["mu_steady_max"]
-    s_lo = lo["m_obs_se"] if np.isfinite(lo["m_obs_se"]) else np.nan
-    s_hi = hi["m_obs_se"] if np.isfinite(hi["m_obs_se"]) else np.nan
-    f = 1.0 - m_hi / m_lo
-    se = (m_hi / m_lo) * math.hypot(s_lo / m_lo, s_hi / m_hi)
+    r, se = ratio(m_hi, hi["m_obs_se"], m_lo, lo["m_obs_se"])  # the error is NaN without a runaway at either end
+    f = 1.0 - r
     return Estimate(float(f), float(se), float(f - tq * se), float(f + tq * se))
 
 

@@ -80,12 +80,19 @@ def main_average(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, Any]]:
     return seed_average(ds.sel(sel) if sel else ds), sel
 
 
-def ratio(a: float, ea: float, b: float, eb: float) -> tuple[float, float]:
-    """a/b with its error from the relative errors of a and b in quadrature."""
+def ratio(a, ea, b, eb):
+    """a/b with its error from the relative errors of a and b in quadrature (numbers or arrays)."""
     r = a / b
-    return r, abs(r) * math.hypot(ea / a, eb / b)
+    return r, abs(r) * np.hypot(ea / a, eb / b)
 
 
+
+
+def ratios_to_first(table):
+    """A table (theta, mu_max, mu_max_se; rows sorted by theta) with mu_max / mu_max of its first
+    row and the error of that :func:`ratio`, as columns ratio_to_theta_min and ratio_se."""
+    r, se = ratio(table["mu_max"], table["mu_max_se"], table["mu_max"].iloc[0], table["mu_max_se"].iloc[0])
+    return table.assign(ratio_to_theta_min=r, ratio_se=se)
 
 
 def epsilon_table(ds: xr.Dataset) -> xr.Dataset:
@@ -118,4 +125,4 @@ def load_drops(avg: xr.Dataset, dim: str) -> list[dict[str, float]]:
 
 
 __all__ = ["FIG6_DIMS", "MAIN_N", "base_config", "drive_velocities", "epsilon_table", "load_drops", "main_average", "main_n",
-           "main_selection", "ratio", "seed_average"]
+           "main_selection", "ratio", "ratios_to_first", "seed_average"]

@@ -101,13 +101,13 @@ def fit(
     t = Table(title="slipchain tester fit (95 % CI)")
     for col in ("group", "F", "v0 (m/s)", "delta", "p_ref (kPa)", "predicts the fall?"):
         t.add_column(col, overflow="fold")
-    for f in result.fits:
+    verdicts = [predicts_fall(f) for f in result.fits]
+    for f, verdict in zip(result.fits, verdicts):
         e = f.params
         ci = lambda k, s=1.0: f"{e[k].value / s:.4g} [{e[k].ci_low / s:.3g}, {e[k].ci_high / s:.3g}]"  # noqa: E731
-        t.add_row(" / ".join(map(str, f.group)), ci("F"), ci("v0"), ci("delta"), ci("p_ref", 1e3),
-                  predicts_fall(f).split(":")[0])
+        t.add_row(" / ".join(map(str, f.group)), ci("F"), ci("v0"), ci("delta"), ci("p_ref", 1e3), verdict.split(":")[0])
     out.print(t)
-    for f in result.fits:
+    for f, verdict in zip(result.fits, verdicts):
         out.print(f"{' / '.join(map(str, f.group))}: does the fitted model predict the measured fall of mu_max with "
-                  f"pressure? {predicts_fall(f)}", markup=False)
+                  f"pressure? {verdict}", markup=False)
     out.print(f"wrote {', '.join(str(p) for p in result.files)}")

@@ -16,11 +16,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, mu_star_norm
+from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import steady_estimate, window_velocity
 from ..results.schema import Status, after_ramp, dead_weight_velocity, velocity_decided
-from ..results.velocity import VelocityStatus
 from . import scheme as S
 
 DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace each time it has grown by 2 %
@@ -173,10 +172,8 @@ def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     dead_weight = c.dead_weight is not None
     auto = c.t_total is None and not dead_weight
     decide = dead_weight and c.t_decide is not None
-    if c.t_ramp is not None:
-        n_ramp = max(1, int(round(c.t_ramp / interval)))
-    else:
-        n_ramp = max(1, int(round(DEAD_WEIGHT_RAMP * (c.t_decide / interval if decide else limit))))
+    ramp_time = dead_weight_ramp_time(c)
+    n_ramp = max(1, int(round(ramp_time / interval if ramp_time is not None else DEAD_WEIGHT_RAMP * limit)))
     return RowControl(
         limit=limit,
         converge=UntilConverged(system, x0_mean, interval) if auto else None,

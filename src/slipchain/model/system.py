@@ -71,6 +71,14 @@ def build_system(config: Config, contact_sites: np.ndarray | None = None, vstar:
 DEAD_WEIGHT_RAMP = 0.25
 
 
+def dead_weight_ramp_time(cfg: Config) -> float | None:
+    """How long the dead-weight force ramps up (s): ``t_ramp``, else DEAD_WEIGHT_RAMP*``t_decide``;
+    None for a fixed-length run, whose ramp is DEAD_WEIGHT_RAMP of its length."""
+    if cfg.t_ramp is not None:
+        return cfg.t_ramp
+    return DEAD_WEIGHT_RAMP * cfg.t_decide if cfg.t_decide is not None else None
+
+
 def dead_weight_force(system: System) -> float:
     """F_b = mu_a*epsilon*f0*theta (theta = N_c/N realised): the hanging weight's share per upper
     block in the dead-weight drive (``config.dead_weight`` = mu_a); 0 with the spring drive."""

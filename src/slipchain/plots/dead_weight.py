@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..analysis.statistics import ratios_to_first
 from ..tester.analysis import OK, RUNAWAY, pressure_group
 from .common import pyplot, save_figure
 
@@ -37,11 +38,7 @@ def spring_drive_maxima(index_csv: str | os.PathLike) -> pd.DataFrame:
         top = gt.loc[gt["mean"].idxmax()]
         se = float(top["std"]) / np.sqrt(top["count"]) if top["count"] > 1 else np.nan
         rows.append({"theta": theta, "mu_max": float(top["mean"]), "mu_max_se": se, "v_d": float(top["v_d"])})
-    out = pd.DataFrame(rows)
-    ref, ref_se = out["mu_max"].iloc[0], out["mu_max_se"].iloc[0]
-    out["ratio_to_theta_min"] = out["mu_max"] / ref
-    out["ratio_se"] = out["ratio_to_theta_min"] * np.hypot(out["mu_max_se"] / out["mu_max"], ref_se / ref)
-    return out
+    return ratios_to_first(pd.DataFrame(rows))
 
 
 def plot_mu_max(summary: pd.DataFrame, evaluations: pd.DataFrame, branch: tuple[np.ndarray, np.ndarray],

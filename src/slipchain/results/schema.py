@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from .._version import __version__
-from ..model.system import DEAD_WEIGHT_RAMP, State, System, dead_weight_force, mu_star_norm
+from ..model.system import DEAD_WEIGHT_RAMP, State, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from .checks import CheckResult, displacement_check, energy_check, stored_energy
 from .observables import SLOW_FRACTION, steady_estimate, window_velocity
 from .velocity import REL_TOL, VelocityFit, VelocityStatus, steady_velocity
@@ -269,20 +269,19 @@ def _var_attrs(e: Entry) -> dict[str, str]:
 
 
 def after_ramp(cfg, time: np.ndarray) -> np.ndarray:
-    """The samples after the dead-weight force ramp, where the velocity is measured: after
-    DEAD_WEIGHT_RAMP of the run (fixed length) or of ``t_decide`` (automatic length), or ``t_ramp``."""
+    """The samples after the dead-weight force ramp, where the velocity is measured
+    (:func:`~slipchain.model.system.dead_weight_ramp_time`; a fixed-length run: DEAD_WEIGHT_RAMP of it)."""
     if not time.size:
         return np.zeros(0, bool)
-    if cfg.t_ramp is not None:
-        return time > cfg.t_ramp
-    return time > DEAD_WEIGHT_RAMP * (time[-1] if cfg.t_decide is None else cfg.t_decide)
+    ramp_time = dead_weight_ramp_time(cfg)
+    return time > (ramp_time if ramp_time is not None else DEAD_WEIGHT_RAMP * time[-1])
 
 
 def dead_weight_velocity(system: System, time: np.ndarray, X_mean: np.ndarray) -> tuple[str, str, VelocityFit | None]:
     """The tester's classification of the slider's trace <X>(t) after the ramp (status, reason,
     fit; :func:`dead_weight_attrs`); with the automatic length (``t_decide``) a window is steady
-    if its velocity changes by at most DECIDE_DRIFT (instead of the tester's REL_TOL). A status ``runaway`` with a fit of status ``ok`` is a slider
-    that slides steadily beyond the rising branch."""
+    if its velocity changes by at most DECIDE_DRIFT (instead of the tester's REL_TOL). A status
+    ``runaway`` with a fit of status ``ok`` is a slider that slides steadily beyond the rising branch."""
     cfg = system.config
     rel_tol = REL_TOL if cfg.t_decide is None else DECIDE_DRIFT
     fit = steady_velocity(time, X_mean, rel_tol) if time.size >= 20 else None

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 
+from ..analysis.statistics import ratios_to_first
 from ..engine.backends import BackendName
 from ..engine.simulate import run
 from ..model.config import Config, ConfigError, make_config
@@ -171,8 +172,7 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
     if refuted and strict:
         raise BracketError(refuted[min(refuted)])
     brackets = [[lo, hi, evals[i][0].velocity] for i in range(n)]
-    stopped: set[int] = set(refuted)  # an undecided (no-steady) run ended their bisection
-    refuted_or_stopped_why = dict(refuted)
+    stopped = dict(refuted)  # realisations whose bisection ended undecided (refuted, or a no-steady run), and why
     while True:
         open_ = [i for i in range(n) if i not in stopped and brackets[i][1] - brackets[i][0] > 2 * tol]
         if not open_:
@@ -185,13 +185,12 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
             elif e.velocity_status == VelocityStatus.RUNAWAY:
                 brackets[i][1] = mid
             else:
-                stopped.add(i)
-                refuted_or_stopped_why[i] = (f"undecided at mu_a = {mid:.6g} ({e.velocity_status}: "
-                                            f"{e.message or 'no message'}); bracket {brackets[i][0]:.6g}-{brackets[i][1]:.6g}")
+                stopped[i] = (f"undecided at mu_a = {mid:.6g} ({e.velocity_status}: {e.message or 'no message'}); "
+                              f"bracket {brackets[i][0]:.6g}-{brackets[i][1]:.6g}")
     return [MuMax(BRACKET if i in refuted else str(VelocityStatus.NO_STEADY if i in stopped else VelocityStatus.OK),
                   float("nan") if i in stopped else 0.5 * (brackets[i][0] + brackets[i][1]),
                   float("nan") if i in refuted else brackets[i][2], brackets[i][0], brackets[i][1], evals[i],
-                  refuted_or_stopped_why.get(i, "")) for i in range(n)]
+                  stopped.get(i, "")) for i in range(n)]
 
 
 def _cache_path(folder: Path, cfg: Config, mu_a: float) -> Path:
@@ -244,11 +243,7 @@ def mu_max_summary(table: "pd.DataFrame") -> "pd.DataFrame":
         rows.append({"theta": theta, "mu_max": float(g["mu_max"].mean()), "mu_max_se": se, "seeds": n,
                      "v_max_m_s": float(g["v_max_m_s"].mean())})
     out = pd.DataFrame(rows)
-    if len(out):
-        ref, ref_se = out["mu_max"].iloc[0], out["mu_max_se"].iloc[0]
-        out["ratio_to_theta_min"] = out["mu_max"] / ref
-        out["ratio_se"] = out["ratio_to_theta_min"] * np.hypot(out["mu_max_se"] / out["mu_max"], ref_se / ref)
-    return out
+    return ratios_to_first(out) if len(out) else out
 
 
 def evaluations_table(configs: list[Config], results: list[MuMax]) -> "pd.DataFrame":
