@@ -168,7 +168,7 @@ def record_field(system: System, state: State, duration: float, interval: float,
         {"u": (("time", "block"), field.u, {"units": "m/s", "long_name": "interface block velocity (instantaneous)"}),
          "f_d_instant": ("time", field.f_d, {"units": "N", "long_name": "driving force per block, instantaneous"}),
          "acoustic": ("time", field.acoustic, {"units": "N", "long_name": "total contact force on the substrate"})},
-        coords={"time": ("time", field.t, {"units": "s"}), "block": np.arange(cfg.N)},
+        coords={"time": ("time", field.t, {"units": "s"}), "block": np.arange(cfg.n_blocks)},
         attrs={"interval": steps * cfg.dt, "v_d": cfg.v_d, "K_T": cfg.K_T, "theta": system.theta_realised},
     )
 

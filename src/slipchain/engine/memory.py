@@ -57,7 +57,7 @@ def estimate_bytes(cfg: Config) -> int:
     chunks = int(t / CHUNK_TIME) + 1
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
-    return int(cfg.N * BYTES_PER_BLOCK + n_c * (BYTES_PER_CONTACT + S.N_CACC * 8 * chunks) + samples * BYTES_PER_SAMPLE)
+    return int(cfg.n_blocks * BYTES_PER_BLOCK + n_c * (BYTES_PER_CONTACT + S.N_CACC * 8 * chunks) + samples * BYTES_PER_SAMPLE)
 
 
 def available_bytes() -> int | None:

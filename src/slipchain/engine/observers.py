@@ -69,7 +69,7 @@ class FieldRecorder:
         self.row = row
         cfg = system.config
         self.t = np.empty(n_max)
-        self.u = np.empty((n_max, cfg.N), dtype=np.float32)
+        self.u = np.empty((n_max, cfg.n_blocks), dtype=np.float32)
         self.f_d = np.empty(n_max)
         self.acoustic = np.empty(n_max)
         self.k = 0

@@ -20,6 +20,8 @@ class ReferenceModel:
 
     def __init__(self, system: System):
         cfg = system.config
+        if cfg.geometry != "chain":
+            raise ValueError(f"the reference integrator is the chain's; geometry = '{cfg.geometry}' has none")
         self.system = system
         self.n = cfg.N
         self.law = cfg.contact_law

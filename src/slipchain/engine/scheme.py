@@ -50,7 +50,11 @@ LOG10_2 = math.log10(2.0)
 
 # Parameter columns in the (B, P) parameter array.
 P_K, P_KL, P_KT, P_KD, P_M, P_ML, P_META, P_VD, P_DT, P_AMP, P_C, P_ETAC, P_SLOW, P_FCONST = range(14)
-N_PARAMS = 14  # P_FCONST: constant force on every UL block (dead-weight drive; 0 with the spring drive)
+P_KY, P_KLY, P_LY, P_LAT = range(14, 18)
+N_PARAMS = 18  # P_FCONST: constant force on every UL block (dead-weight drive; 0 with the spring drive)
+# P_KY, P_KLY: IL and UL springs along y (G a, N_L G a; chain2d); P_LY: Ly; P_LAT: 1 for the 2-D
+# lattice stencil (chain2d), 0 for the chain. With the slab and half-space, P_META is m*gamma, gamma
+# the radiation damping rate (Config.radiation_damping_rate).
 
 # Output columns per sample and accumulator columns.
 O_FD, O_XMEAN, O_XUMEAN = range(3)  # mean f_d over the sample; mean x and mean X at its end
@@ -185,6 +189,28 @@ def block_update(i, ip, im, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
     dampX[i] = dX
 
 
+def block_update_2d(i, ip, im, jp, jm, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive,
+                    fconst, dtm, dtmL):
+    """:func:`block_update` on the square lattice of 'chain2d' (issue 13): neighbours ip, im along x
+    and jp, jm along y; springs K, K_L along x and K_Y = G a, K_LY = N_L G a along y, a pair
+    damper m*eta on every spring (the chain's, extended)::
+
+        m dU... as the chain, plus  K_Y (x_jp + x_jm - 2 x_i) - m eta (2 u_i - u_jp - u_jm)  (IL)
+                                   K_LY (X_jp + X_jm - 2 X_i) - m eta (2 U_i - U_jp - U_jm) (UL)
+
+    With Ly = 1 (jp = jm = i) the y terms vanish and this is the chain to round-off.
+    """
+    dx = meta * (ur[ip] + ur[im] + ur[jp] + ur[jm] + Ur[i] - 5.0 * ur[i])
+    dX = meta * (Ur[ip] + Ur[im] + Ur[jp] + Ur[jm] + ur[i] - 5.0 * Ur[i])
+    fx = (K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KY * (xr[jp] + xr[jm] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i]) + dx)
+    fX = (KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KLY * (Xr[jp] + Xr[jm] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i])
+          + Kd * (drive - Xr[i]) + fconst + dX)
+    un[i] = ur[i] + dtm * fx
+    Un[i] = Ur[i] + dtmL * fX
+    dampx[i] = dx
+    dampX[i] = dX
+
+
 def row_parameters(p):
     """The scheme's constants for one row ``p`` of the (B, P) parameter array: (K, K_L, K_T, K_d,
     m, m*eta, v_d, F_b, dt, dt/m, dt/(N_L m), b = dt*epsilon*f0, c, m_eff = m(1 + dt*eta_c), slow)."""
@@ -197,7 +223,7 @@ def row_parameters(p):
 # The scheme's functions in dependency order; those marked True are small enough to inline.
 FUNCTIONS: tuple[tuple[str, bool], ...] = (
     ("exp_taylor", True), ("scaled_exp", True), ("solve_contact_bracketed", False), ("taylor_newton_step", True),
-    ("solve_contact", False), ("block_update", True), ("row_parameters", True),
+    ("solve_contact", False), ("block_update", True), ("block_update_2d", True), ("row_parameters", True),
 )
 
 

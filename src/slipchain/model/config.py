@@ -23,7 +23,9 @@ ALLOWED: dict[str, str] = {
     "E": "a number > 0 (Young modulus, Pa)",
     "nu": "a number in (-1, 0.5] (Poisson ratio)",
     "N_L": "an integer >= 1 (upper-layer height in blocks)",
-    "N": "an integer >= 3 (blocks per chain)",
+    "N": "an integer >= 3 (blocks per chain; blocks along the sliding direction x, Lx, in 2-D)",
+    "Ly": "an integer >= 1 (blocks across the sliding direction, y; 1 for the chain)",
+    "geometry": "one of 'chain', 'chain2d', 'slab', 'halfspace'",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
     "c": "a number >= 0",
     "v0": "a number > 0 (m/s)",
@@ -52,6 +54,15 @@ LEGACY_KEYS: dict[str, str] = {
     "backend": "how a run is executed is not part of what is simulated: give the backend to run(..., backend=...), "
                "simulate(), run_sweep() or the CLI's --backend instead",
 }
+
+
+# Keys added after 0.2 with a value that means "as before" (the chain): left out of the TOML text and
+# of sweep member ids while at it, so stored runs and stores stay valid.
+OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1}
+_NOT_OFF = object()
+
+# The explicit 2-D steps keep dt*omega_max below this fraction of symplectic Euler's limit 2.
+STABLE_FRACTION = 0.9
 
 
 class ConfigError(ValueError):
@@ -103,6 +114,8 @@ class Config(BaseModel):
     v_d: float = Field(1e-3, gt=0)
     start: Literal["rest", "steady"] = "rest"
     dead_weight: float | None = Field(None, gt=0)
+    geometry: Literal["chain", "chain2d", "slab", "halfspace"] = "chain"
+    Ly: int = Field(1, ge=1)
 
     dt: float = Field(2e-8, gt=0)
     t_total: float | None = Field(None, gt=0)
@@ -119,10 +132,12 @@ class Config(BaseModel):
             value = getattr(self, key)
             if isinstance(value, float) and not math.isfinite(value):
                 raise ValueError(_message(key, value, ALLOWED[key] + ", finite"))
-        if round(self.theta * self.N) < 1:
+        if round(self.theta * self.n_blocks) < 1:
             raise ValueError(
-                _message("theta", self.theta, f"theta*N >= 0.5 so that N_c = round(theta*N) >= 1 (N = {self.N})")
+                _message("theta", self.theta, f"theta*N*Ly >= 0.5 so that N_c = round(theta*N*Ly) >= 1 (N = {self.N}, "
+                         f"Ly = {self.Ly})")
             )
+        self._check_geometry()
         if self.output_interval < self.dt:
             raise ValueError(_message("output_interval", self.output_interval, f"at least dt = {self.dt:g}"))
         if abs(math.log10(self.v0)) + self.delta > 290:  # v* = v0*10**(+-delta) must be ordinary floats
@@ -162,7 +177,70 @@ class Config(BaseModel):
             )
         return self
 
+    def _check_geometry(self) -> None:
+        """The 2-D geometries (issue 13): Ly only off the chain, no dead weight on the continuum
+        yet, and the explicit step stable: dt*omega_max < STABLE_FRACTION*2 (symplectic Euler)."""
+        if self.geometry == "chain":
+            if self.Ly != 1:
+                raise ValueError(_message("Ly", self.Ly, "1 with geometry = 'chain' (a 2-D interface is geometry = "
+                                          "'chain2d', 'slab' or 'halfspace')"))
+            return
+        if self.geometry in ("slab", "halfspace") and self.dead_weight is not None:
+            raise ValueError(_message("dead_weight", self.dead_weight, f"absent with geometry = '{self.geometry}' "
+                                      "(the dead-weight drive is built for the chains only, so far)"))
+        w = self.omega_max
+        if not self.dt * w < 2.0 * STABLE_FRACTION:
+            raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / w:.3g} s for geometry = "
+                                      f"'{self.geometry}': the explicit step needs dt*omega_max < "
+                                      f"{2.0 * STABLE_FRACTION:g}, omega_max = {w:.4g} 1/s"))
+
     # --- derived quantities (MODEL.md tables) -------------------------------------------
+    @property
+    def n_blocks(self) -> int:
+        """Interface blocks: N for the chain, N*Ly (Lx = N along x) for the 2-D geometries."""
+        return self.N * self.Ly
+
+    @property
+    def H(self) -> float:
+        """Slab thickness H = N_L*a [m] (geometry 'slab')."""
+        return self.N_L * self.a
+
+    @property
+    def kappa_d(self) -> float:
+        """Drive springs per area kappa_d = K_d/a**2 [Pa/m] (slab, halfspace)."""
+        return self.K_d / self.a**2
+
+    @property
+    def c_s(self) -> float:
+        """Shear-wave speed c_s = sqrt(G/rho) [m/s]."""
+        return math.sqrt(self.G / self.rho)
+
+    @property
+    def radiation_damping_rate(self) -> float:
+        """gamma = a**2 (G/c_s)/m = c_s/a [1/s]: the slab's radiation damping G/c_s per area on a block of
+        mass m (slab, halfspace; the quasi-dynamic approximation, Rice 1993, as in QDYN)."""
+        return self.c_s / self.a
+
+    @property
+    def omega_max(self) -> float:
+        """Upper bound of the undamped angular frequencies [1/s] (Gershgorin for the chains; for the
+        slab and half-space a**2 max k / m, k at the largest |q| of the grid, where k is largest)."""
+        if self.geometry in ("chain", "chain2d"):
+            ky = self.G * self.a if self.geometry == "chain2d" else 0.0
+            kyl = self.N_L * ky
+            il = 2.0 * (2.0 * self.K + 2.0 * ky + self.K_T) / self.m
+            ul = 2.0 * (2.0 * self.K_L + 2.0 * kyl + self.K_T) / (self.N_L * self.m) + self.K_d / (self.N_L * self.m)
+            return math.sqrt(max(il, ul))
+        from .elastic import halfspace_kernel, slab_kernel
+
+        qx = math.pi / self.a if self.N > 1 else 0.0
+        qy = math.pi / self.a if self.Ly > 1 else 0.0
+        if self.geometry == "slab":
+            k = float(slab_kernel(qx, qy, self.H, self.G, self.nu, self.kappa_d))
+        else:
+            k = float(halfspace_kernel(qx, qy, self.G, self.nu, self.kappa_d))
+        return math.sqrt(self.a**2 * k / self.m)
+
     @property
     def m(self) -> float:
         """Interface-block mass m = rho*a**3 [kg]."""
@@ -205,8 +283,8 @@ class Config(BaseModel):
 
     @property
     def n_contacts(self) -> int:
-        """N_c = round(theta*N)."""
-        return int(round(self.theta * self.N))
+        """N_c = round(theta*N*Ly) (Ly = 1 for the chain)."""
+        return int(round(self.theta * self.n_blocks))
 
     @property
     def contact_law(self) -> ContactLaw:
@@ -233,7 +311,7 @@ class Config(BaseModel):
         """The config as flat TOML (None values omitted), readable by :func:`load_config`."""
         lines = []
         for key, value in self.model_dump().items():
-            if value is None:
+            if value is None or OFF.get(key, _NOT_OFF) == value:
                 continue
             lines.append(f"{key} = {_toml_value(value)}")
         return "\n".join(lines) + "\n"
@@ -344,4 +422,4 @@ def load_config(path: str | Path | None = None, overrides: Sequence[str] = ()) -
     return make_config(data)
 
 
-__all__ = ["ALLOWED", "LEGACY_KEYS", "Config", "ConfigError", "config_from_toml", "load_config", "make_config", "parse_override", "read_toml"]
+__all__ = ["ALLOWED", "LEGACY_KEYS", "OFF", "STABLE_FRACTION", "Config", "ConfigError", "config_from_toml", "load_config", "make_config", "parse_override", "read_toml"]

@@ -1,9 +1,15 @@
-"""The two-chain slider of Fig. 4 plus one disorder realisation, built from an explicit seed.
+"""The slider of Fig. 4 plus one disorder realisation, built from an explicit seed.
 
 Interface layer (IL): N cubes of mass m, displacements x_i, velocities u_i.
 Upper layer (UL): N parallelepipeds of mass N_L*m, displacements X_i, velocities U_i.
 N_c = round(theta*N) distinct IL blocks carry one frictional contact each, with
 log10(v*_i) uniform on [log10 v0 - delta, log10 v0 + delta] (MODEL.md, "Frictional contacts").
+
+The 2-D geometries (``config.geometry``, issue 13) have N*Ly interface blocks on an (Lx = N, Ly)
+periodic grid, stored flat in row-major order: block (ix, iy) is index ix*Ly + iy, so x-neighbours
+are Ly apart and Ly = 1 is the chain's numbering. 'chain2d' has an upper layer of N*Ly columns;
+'slab' and 'halfspace' have none (X, U stay zero): the elastic body is quasi-static, its force on
+the blocks a Fourier-space kernel (:mod:`.elastic`).
 """
 
 from __future__ import annotations
@@ -29,36 +35,36 @@ class System:
 
     @property
     def theta_realised(self) -> float:
-        """theta = N_c/N, the realised contact fraction used in mu_star."""
-        return self.n_contacts / self.config.N
+        """theta = N_c/N (N*Ly in 2-D), the realised contact fraction used in mu_star."""
+        return self.n_contacts / self.config.n_blocks
 
     def steady_friction_per_block(self) -> float:
         """(1/N) sum_contacts f(v_d, v*_i): the mean force per block in uniform sliding [N]."""
         if self.n_contacts == 0:
             return 0.0
         f = self.config.contact_law.force(self.config.v_d, self.vstar)
-        return float(np.sum(f)) / self.config.N
+        return float(np.sum(f)) / self.config.n_blocks
 
 
 def build_system(config: Config, contact_sites: np.ndarray | None = None, vstar: np.ndarray | None = None) -> System:
     """Draw the disorder from ``config.seed`` (or take explicit sites and v*, for tests).
 
-    The draw is: sites = rng.choice(N, N_c, replace=False), sorted; then
+    The draw is: sites = rng.choice(N*Ly, N_c, replace=False), sorted; then
     log10(v*) = log10(v0) + rng.uniform(-delta, delta, N_c), in site order, with
     ``rng = numpy.random.default_rng(seed)``. Same config and seed, same realisation.
     """
     cfg = config
     if contact_sites is None:
         rng = np.random.default_rng(cfg.seed)
-        sites = np.sort(rng.choice(cfg.N, size=cfg.n_contacts, replace=False)).astype(np.int64)
+        sites = np.sort(rng.choice(cfg.n_blocks, size=cfg.n_contacts, replace=False)).astype(np.int64)
         vs = cfg.v0 * 10.0 ** rng.uniform(-cfg.delta, cfg.delta, size=sites.size)
     else:
         sites = np.asarray(contact_sites, dtype=np.int64)
         vs = np.asarray(vstar, dtype=float) if vstar is not None else np.full(sites.size, cfg.v0)
         if sites.ndim != 1 or vs.shape != sites.shape:
             raise ValueError(f"contact_sites {sites.shape} and vstar {vs.shape} must be 1-d and equal in length")
-        if sites.size and (sites.min() < 0 or sites.max() >= cfg.N or np.unique(sites).size != sites.size):
-            raise ValueError(f"contact_sites must be distinct indices in [0, {cfg.N}); got {sites.tolist()}")
+        if sites.size and (sites.min() < 0 or sites.max() >= cfg.n_blocks or np.unique(sites).size != sites.size):
+            raise ValueError(f"contact_sites must be distinct indices in [0, {cfg.n_blocks}); got {sites.tolist()}")
         if np.any(vs <= 0) or not np.all(np.isfinite(vs)):
             raise ValueError("vstar must be finite and > 0")
         order = np.argsort(sites)
@@ -96,6 +102,27 @@ def mu_star_norm(system: System) -> float:
     return cfg.epsilon * cfg.f0 * (system.theta_realised if system.n_contacts else 1.0)
 
 
+def uniform_stiffness(cfg: Config) -> float:
+    """k(0) [Pa/m]: the stiffness per area of the uniform mode of the slab, (H/G + 1/kappa_d)**-1, or of the
+    half-space, kappa_d (the drive springs alone)."""
+    return cfg.kappa_d if cfg.geometry == "halfspace" else 1.0 / (cfg.H / cfg.G + 1.0 / cfg.kappa_d)
+
+
+def elastic_kernel(cfg: Config) -> np.ndarray:
+    """a**2 k(q) [N/m] on the rfft2 grid of the (N, Ly) interface (slab, halfspace; :mod:`.elastic`):
+    the block force is -IFFT[a**2 k FFT(x - v_d t)]."""
+    from .elastic import halfspace_kernel, slab_kernel, wavenumbers
+
+    qx, qy = wavenumbers(cfg.N, cfg.Ly, cfg.a)
+    if cfg.geometry == "slab":
+        k = slab_kernel(qx, qy, cfg.H, cfg.G, cfg.nu, cfg.kappa_d)
+    elif cfg.geometry == "halfspace":
+        k = halfspace_kernel(qx, qy, cfg.G, cfg.nu, cfg.kappa_d)
+    else:
+        raise ValueError(f"geometry {cfg.geometry!r} has no elastic kernel (only 'slab' and 'halfspace')")
+    return cfg.a**2 * k
+
+
 @dataclass
 class State:
     """Dynamic state of one realisation: displacements from the lattice sites and velocities."""
@@ -116,14 +143,19 @@ def initial_state(system: System) -> State:
     rest: every block at rest at its site; the drive starts at 0 and moves at v_d.
     steady: every block moves at v_d; X_i = -F/K_d and x_i = X_i - F/K_T with
     F = (1/N) sum_contacts f(v_d, v*_i), so that drive and transverse springs carry the mean
-    steady-sliding friction per block.
+    steady-sliding friction per block. Slab and half-space: x_i = -F/(a**2 k(0)) (the uniform mode
+    of the elastic kernel carries it), X = U = 0 (no upper layer).
     """
     cfg = system.config
-    n = cfg.N
+    n = cfg.n_blocks
     if cfg.start == "rest":
         zeros = np.zeros(n)
         return State(zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy(), 0)
     force = system.steady_friction_per_block()
+    if cfg.geometry in ("slab", "halfspace"):
+        zeros = np.zeros(n)
+        return State(np.full(n, -force / (cfg.a**2 * uniform_stiffness(cfg))), np.full(n, cfg.v_d), zeros.copy(),
+                     zeros.copy(), 0)
     X = np.full(n, -force / cfg.K_d)
     x = X - force / cfg.K_T
     v = np.full(n, cfg.v_d)

@@ -27,6 +27,22 @@ def stored_energy(system: System, state: State) -> float:
     x, u, X, U = state.x, state.u, state.X, state.U
     drive = cfg.v_d * state.step * cfg.dt
     kinetic = 0.5 * cfg.m * np.sum(u * u) + 0.5 * cfg.N_L * cfg.m * np.sum(U * U)
+    if cfg.geometry in ("slab", "halfspace"):  # the quasi-static body: (1/2) sum (x - d) . (-F_el)
+        from ..model.elastic import elastic_force
+        from ..model.system import elastic_kernel
+
+        d = (x - drive).reshape(cfg.N, cfg.Ly)
+        return float(kinetic - 0.5 * np.sum(d * elastic_force(d, 0.0, elastic_kernel(cfg), 1.0)))
+    if cfg.geometry == "chain2d":  # the (Lx, Ly) lattice, row-major (model.system)
+        g = (cfg.N, cfg.Ly)
+        xg, Xg = x.reshape(g), X.reshape(g)
+        ky = cfg.G * cfg.a
+        elastic = sum(0.5 * k * np.sum((np.roll(f, -1, axis=ax) - f) ** 2)
+                      for k, f, ax in ((cfg.K, xg, 0), (cfg.K_L, Xg, 0), (ky, xg, 1), (cfg.N_L * ky, Xg, 1)))
+        elastic += 0.5 * cfg.K_T * np.sum((X - x) ** 2)
+        if cfg.dead_weight is None:
+            elastic += 0.5 * cfg.K_d * np.sum((drive - X) ** 2)
+        return float(kinetic + elastic)
     elastic = (
         0.5 * cfg.K * np.sum((np.roll(x, -1) - x) ** 2)
         + 0.5 * cfg.K_L * np.sum((np.roll(X, -1) - X) ** 2)

@@ -93,7 +93,9 @@ RUN_ATTRIBUTES: tuple[Entry, ...] = (
     Entry("sem_target_reached", "", "", "1 if the automatic length reached sem_target"),
     Entry("theta", "", "", "realised theta = N_c/N", summary=True, sweep="theta_realised"),
     Entry("n_contacts", "", "", "number of contacts N_c", summary=True, sweep="n_contacts"),
-    Entry("N", "", "", "blocks per chain", summary=True),
+    Entry("N", "", "", "blocks per chain (along x, Lx, in 2-D)", summary=True),
+    Entry("geometry", "", "", "chain, chain2d, slab or halfspace (issue 13)"),
+    Entry("Ly", "", "", "blocks across the sliding direction (1 for the chain)"),
     Entry("v_d", "", "m/s", "drive velocity", summary=True),
     Entry("eta_c", "", "1/s", "contact damping", summary=True),
     Entry("epsilon", "", "", "contact-force scale", summary=True),
@@ -221,7 +223,7 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
               "U": final.U}
     ds = xr.Dataset(
         data_vars={k: (_VARIABLES[k].dims, v, _var_attrs(_VARIABLES[k])) for k, v in values.items()},
-        coords={"time": ("time", time, {"units": "s"}), "contact": np.arange(system.n_contacts), "block": np.arange(cfg.N)},
+        coords={"time": ("time", time, {"units": "s"}), "contact": np.arange(system.n_contacts), "block": np.arange(cfg.n_blocks)},
     )
     has_contacts = est is not None and system.n_contacts > 0
     attrs: dict[str, Any] = {
@@ -239,6 +241,8 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
         "theta": system.theta_realised,
         "n_contacts": system.n_contacts,
         "N": cfg.N,
+        "geometry": cfg.geometry,
+        "Ly": cfg.Ly,
         "v_d": cfg.v_d,
         "eta_c": cfg.eta_c,
         "epsilon": cfg.epsilon,

@@ -44,7 +44,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..model.config import Config, ConfigError, make_config, read_toml
+from ..model.config import OFF, Config, ConfigError, make_config, read_toml
 
 
 class SweepError(ValueError):
@@ -88,6 +88,9 @@ def member_id(config: Config) -> str:
     data["backend"] = "cpu"  # frozen: part of the 0.1 id text (see the docstring)
     for key in OPTIONAL_FEATURES:
         if data.get(key) is None:
+            data.pop(key, None)
+    for key, off in OFF.items():  # the geometry keys (issue 13) at their chain values: as before
+        if data.get(key) == off:
             data.pop(key, None)
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

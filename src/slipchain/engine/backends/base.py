@@ -13,14 +13,18 @@ from typing import Protocol
 
 import numpy as np
 
-from ...model.system import State, System, dead_weight_force
+from ...model.system import State, System, dead_weight_force, elastic_kernel
 from ...results.observables import SLOW_FRACTION
 from .. import scheme as S
 
 
 @dataclass
 class Batch:
-    """Realisations packed into (B, N) / (B, C) arrays for a kernel."""
+    """Realisations packed into (B, N) / (B, C) arrays for a kernel (N*Ly blocks per row in 2-D).
+
+    ``geometry`` and ``shape`` = (Lx, Ly) are the batch's (all rows share them); ``kernel`` holds
+    a**2 k(q) on the rfft2 grid of each row, (B, Lx, Ly//2 + 1), for 'slab' and 'halfspace'.
+    """
 
     x: np.ndarray
     u: np.ndarray
@@ -33,12 +37,15 @@ class Batch:
     n_contacts: np.ndarray
     ysolve: np.ndarray
     status: np.ndarray
+    geometry: str = "chain"
+    shape: tuple[int, int] = (0, 1)
+    kernel: np.ndarray | None = None
 
     @classmethod
     def pack(cls, systems: list[System], states: list[State]) -> "Batch":
-        n = systems[0].config.N
-        if any(s.config.N != n for s in systems):
-            raise ValueError("all realisations of a batch must have the same N")
+        c0 = systems[0].config
+        if any((s.config.N, s.config.Ly, s.config.geometry) != (c0.N, c0.Ly, c0.geometry) for s in systems):
+            raise ValueError("all realisations of a batch must have the same N, Ly and geometry")
         b = len(systems)
         cmax = max(1, max(s.n_contacts for s in systems))
         params = np.zeros((b, S.N_PARAMS))
@@ -70,10 +77,29 @@ class Batch:
             n_contacts=ncon,
             ysolve=ysolve,
             status=np.full(b, -1, dtype=np.int64),
+            geometry=c0.geometry,
+            shape=(c0.N, c0.Ly),
+            kernel=_kernels(systems),
         )
 
     def state(self, row: int) -> State:
         return State(self.x[row].copy(), self.u[row].copy(), self.X[row].copy(), self.U[row].copy(), int(self.step[row]))
+
+
+def _kernels(systems: list[System]) -> np.ndarray | None:
+    """a**2 k(q) per row for the slab and half-space (None for the chains); rows with equal
+    elastic parameters share one computation."""
+    if systems[0].config.geometry not in ("slab", "halfspace"):
+        return None
+    cache: dict[tuple, np.ndarray] = {}
+    rows = []
+    for s in systems:
+        c = s.config
+        key = (c.a, c.E, c.nu, c.N_L, c.geometry)
+        if key not in cache:
+            cache[key] = elastic_kernel(c)
+        rows.append(cache[key])
+    return np.stack(rows)
 
 
 def kernel_params(system: System) -> np.ndarray:
@@ -93,6 +119,14 @@ def kernel_params(system: System) -> np.ndarray:
     p[S.P_C] = cfg.c
     p[S.P_ETAC] = cfg.eta_c
     p[S.P_SLOW] = SLOW_FRACTION * cfg.v_d
+    p[S.P_LY] = cfg.Ly
+    if cfg.geometry == "chain2d":
+        p[S.P_LAT] = 1.0
+        p[S.P_KY] = cfg.G * cfg.a
+        p[S.P_KLY] = cfg.N_L * cfg.G * cfg.a
+    elif cfg.geometry in ("slab", "halfspace"):  # no upper layer: the kernel couples; radiation damping
+        p[S.P_KL] = p[S.P_KT] = 0.0
+        p[S.P_META] = cfg.m * cfg.radiation_damping_rate
     if cfg.dead_weight is not None:  # constant force per upper block instead of the drive springs
         p[S.P_KD] = 0.0
         p[S.P_FCONST] = dead_weight_force(system)

@@ -16,7 +16,8 @@ import numba as nb
 import numpy as np
 
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, N_ACC, N_CACC, N_OUT,
-                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, TAYLOR_MAX, Y_LOG, Y_P, Y_Q, compile_for)
+                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_KLY, P_KY, P_LAT, P_LY, TAYLOR_MAX, Y_LOG, Y_P, Y_Q,
+                      compile_for)
 from .base import Batch, ChunkOutput
 
 _scheme = compile_for(lambda name, inline: nb.njit(cache=True, inline="always" if inline else "never"))
@@ -26,6 +27,7 @@ solve_contact_bracketed = _scheme.solve_contact_bracketed
 taylor_newton_step = _scheme.taylor_newton_step
 solve_contact = _scheme.solve_contact
 block_update = _scheme.block_update
+block_update_2d = _scheme.block_update_2d
 row_parameters = _scheme.row_parameters
 
 
@@ -73,6 +75,56 @@ def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, 
     for i in range(n):
         sx += Xr[i]
     return Kd * (n * drive - sx)
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive, fconst, dtm,
+                        dtmL):
+    """:func:`_explicit_forces` on the (Lx, Ly) lattice of 'chain2d' (row-major, block ix*Ly + iy)."""
+    n = xr.size
+    lx = n // ly
+    for ix in range(lx):
+        base = ix * ly
+        ipx = ((ix + 1) % lx) * ly
+        imx = ((ix + lx - 1) % lx) * ly
+        for iy in range(ly):
+            jp = base + (iy + 1 if iy + 1 < ly else 0)
+            jm = base + (iy - 1 if iy > 0 else ly - 1)
+            block_update_2d(base + iy, ipx + iy, imx + iy, jp, jm, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
+                            KY, KLY, meta, drive, fconst, dtm, dtmL)
+    sx = 0.0
+    for i in range(n):
+        sx += Xr[i]
+    return Kd * (n * drive - sx)
+
+
+@nb.njit(cache=True)
+def _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt):
+    """The implicit contact solve of one step (scheme, step 3) for one row: every contact block's
+    new velocity written into ``un``, the force applied into ``fk``."""
+    for k in range(nc):
+        rk[k] = m * un[st[k]]
+        ra[k] = abs(rk[k])
+    if c > 0.0:
+        newton_pass(nc, ra, vs, ys, uk, ok, m_eff, bc, c)
+    else:
+        ok[:nc] = False
+    for k in range(nc):
+        if ok[k]:
+            uk[k] = math.copysign(uk[k], rk[k])
+        else:
+            uk[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact(
+                rk[k], m_eff, bc, c, vs[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k])
+        fk[k] = (rk[k] - m * uk[k]) * inv_dt  # the contact force f(u) actually applied
+        un[st[k]] = uk[k]
+
+
+@nb.njit(cache=True)
+def _refresh_solver(nc, ys, c):
+    """Exact 10**y and exp(-c y^2) at the start of a sample: no round-off drift of the updates."""
+    for k in range(nc):
+        ys[Y_P, k] = math.exp(LN10 * ys[Y_LOG, k])
+        ys[Y_Q, k] = math.exp(-c * ys[Y_LOG, k] * ys[Y_LOG, k])
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -128,6 +180,10 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
         if status[row] >= 0:
             continue
         K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = row_parameters(params[row])
+        lattice = params[row, P_LAT] > 0.0
+        ly = int(params[row, P_LY])
+        KY = params[row, P_KY]
+        KLY = params[row, P_KLY]
         inv_dt = 1.0 / dt
         nc = n_contacts[row]
         xr = x[row]
@@ -142,29 +198,17 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
         w_damp = 0.0
         w_contact = 0.0
         for s in range(n_samples):
-            for k in range(nc):  # exact 10**y and exp(-c y^2): no round-off drift of the updates
-                ys[Y_P, k] = math.exp(LN10 * ys[Y_LOG, k])
-                ys[Y_Q, k] = math.exp(-c * ys[Y_LOG, k] * ys[Y_LOG, k])
+            _refresh_solver(nc, ys, c)
             fd_sum = 0.0
             for _ in range(sample_steps):
                 drive = vd * (step[row] * dt)
-                fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm,
-                                        dtmL)
-                for k in range(nc):
-                    rk[k] = m * un[st[k]]
-                    ra[k] = abs(rk[k])
-                if c > 0.0:
-                    newton_pass(nc, ra, vs, ys, uk, ok, m_eff, bc, c)
+                if lattice:
+                    fsum = _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
+                                               drive, fconst, dtm, dtmL)
                 else:
-                    ok[:nc] = False
-                for k in range(nc):
-                    if ok[k]:
-                        uk[k] = math.copysign(uk[k], rk[k])
-                    else:
-                        uk[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact(
-                            rk[k], m_eff, bc, c, vs[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k])
-                    fk[k] = (rk[k] - m * uk[k]) * inv_dt  # the contact force f(u) actually applied
-                    un[st[k]] = uk[k]
+                    fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst,
+                                            dtm, dtmL)
+                _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt)
                 w_contact -= _contact_sums(nc, fk, uk, ca, slow) * dt
                 w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
                 w_drive += fsum * vd * dt
@@ -192,6 +236,10 @@ class CPUBackend:
     name = "cpu"
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
+        if batch.kernel is not None:  # slab, half-space: the elastic force by FFT
+            from . import spectral
+
+            return spectral.advance(batch, n_samples, sample_steps)
         b = batch.x.shape[0]
         out = np.zeros((b, n_samples, N_OUT))
         acc = np.zeros((b, N_ACC))

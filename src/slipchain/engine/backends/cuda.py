@@ -252,6 +252,9 @@ class CUDABackend:
         return THREADS_MAX if rows <= _sm_count() else 128
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
+        if batch.geometry != "chain":
+            raise ValueError(f"geometry = '{batch.geometry}' runs on the CPU backend only in this version "
+                             "(backend='cpu'); the GPU kernel is the chain's")
         b, n = batch.x.shape
         threads = self.threads or min(self.default_threads(b), max(1, n))
         in_shared = (SHARED_ARRAYS * n + threads) * 8 <= SHARED_BYTES and self.shared

@@ -1,0 +1,146 @@
+"""The 2-D geometries of issue 13 (chain2d, slab, halfspace): reductions to the chain, the slab's
+modes against their analytic dynamics, its uniform mode against an independent ODE solver, energy
+balance, and the config's checks (member ids of chain runs unchanged)."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import slipchain as sc
+from slipchain.model.config import ConfigError, make_config
+from slipchain.model.system import State, build_system, elastic_kernel, initial_state, uniform_stiffness
+from slipchain.sweeps.definition import member_id
+
+
+def _rel(a, b):
+    return np.max(np.abs(a - b)) / np.mean(np.abs(a))
+
+
+def test_chain2d_with_one_row_is_the_chain_to_round_off():
+    """Issue 13: chain2d at Ly = 1 (its own 2-D stencil, y-neighbours = the block itself) reproduces
+    the chain: f_d(t) and mu_star to round-off before the dynamics amplify it (1 ms here)."""
+    base = dict(N=101, t_total=1e-3, theta=0.5, start="steady", output_interval=1e-4)
+    a = sc.run(base)
+    b = sc.run(dict(base, geometry="chain2d"))
+    assert a.attrs["geometry"] == "chain" and b.attrs["geometry"] == "chain2d"
+    assert _rel(a.f_d.values, b.f_d.values) < 1e-12
+    assert abs(a.attrs["mu_star"] / b.attrs["mu_star"] - 1) < 1e-12
+    assert np.max(np.abs(a.x.values - b.x.values)) < 1e-12 * np.max(np.abs(a.x.values))
+
+
+def test_chain2d_rows_repeated_across_y_are_the_chain():
+    """Contacts repeated identically in every one of Ly = 4 rows: the motion is uniform in y, the y
+    springs and dampers carry nothing, and every row moves as the chain (same f_d per block)."""
+    cfg = make_config(N=61, theta=0.3, t_total=1e-3, start="steady", output_interval=1e-4)
+    chain = build_system(cfg)
+    ly = 4
+    cfg2 = cfg.with_updates(geometry="chain2d", Ly=ly)
+    sites = (chain.contact_sites[:, None] * ly + np.arange(ly)[None, :]).ravel()
+    two_d = build_system(cfg2, sites, np.repeat(chain.vstar, ly))
+    a = sc.simulate(chain)
+    b = sc.simulate(two_d)
+    assert _rel(a.f_d.values, b.f_d.values) < 1e-12
+    assert np.max(np.abs(b.x.values.reshape(61, ly) - a.x.values[:, None])) < 1e-12 * np.max(np.abs(a.x.values))
+
+
+@pytest.mark.parametrize("geometry", ["slab", "halfspace"])
+def test_slab_rows_repeated_across_y_equal_one_row(geometry):
+    """The slab's kernel at qy = 0 is k_PSV(qx): a y-uniform state of an (N, 4) slab moves as the
+    (N, 1) slab (only FFT round-off differs)."""
+    cfg = make_config(N=32, geometry=geometry, theta=0.3, t_total=5e-4, start="steady", output_interval=1e-4)
+    one = build_system(cfg)
+    ly = 4
+    sites = (one.contact_sites[:, None] * ly + np.arange(ly)[None, :]).ravel()
+    four = build_system(cfg.with_updates(Ly=ly), sites, np.repeat(one.vstar, ly))
+    a, b = sc.simulate(one), sc.simulate(four)
+    assert _rel(a.f_d.values, b.f_d.values) < 1e-9
+    assert np.max(np.abs(b.x.values.reshape(32, ly) - a.x.values[:, None])) < 1e-9 * np.max(np.abs(a.x.values))
+
+
+@pytest.mark.parametrize("geometry,mode", [("slab", (1, 0)), ("slab", (2, 3)), ("halfspace", (0, 1))])
+def test_slab_fourier_mode_rings_at_its_frequency(geometry, mode):
+    """No contacts, steady sliding plus one Fourier mode of amplitude A: the mode is a damped
+    oscillator, A e^{-gamma t/2} (cos w_d t + gamma/(2 w_d) sin w_d t), w**2 = a**2 k(q)/m,
+    gamma = c_s/a. Checked at the end against the scheme's first-order error (halved with dt)."""
+    lx, ly = 16, 8
+    errs = []
+    for dt in (2e-9, 1e-9):
+        cfg = make_config(N=lx, Ly=ly, geometry=geometry, dt=dt, t_total=4e-7, output_interval=1e-8, start="steady")
+        system = build_system(cfg, np.array([0]), np.array([cfg.v0]))
+        system = type(system)(cfg, np.zeros(0, np.int64), np.zeros(0))
+        st = initial_state(system)
+        ix, iy = np.meshgrid(np.arange(lx), np.arange(ly), indexing="ij")
+        amp = 1e-9
+        st.x[:] = amp * np.cos(2 * np.pi * (mode[0] * ix / lx + mode[1] * iy / ly)).ravel()
+        ds = sc.simulate(system, st)
+        k = elastic_kernel(cfg)[mode[0], mode[1]]
+        w0, g = math.sqrt(k / cfg.m), cfg.radiation_damping_rate
+        wd = math.sqrt(w0**2 - g**2 / 4)
+        t = ds.attrs["steps"] * dt
+        expect = amp * math.exp(-g * t / 2) * (math.cos(wd * t) + g / (2 * wd) * math.sin(wd * t))
+        got = (ds.x.values - cfg.v_d * t).reshape(lx, ly)
+        shape = np.cos(2 * np.pi * (mode[0] * ix / lx + mode[1] * iy / ly))
+        errs.append(np.max(np.abs(got - expect * shape)) / amp)
+    assert errs[1] < 0.6 * errs[0] + 1e-9 and errs[1] < 0.05, errs
+
+
+def test_slab_uniform_mode_from_rest_agrees_with_an_ode_solver():
+    """Identical contacts on every block, from rest: the slab moves as one block,
+    m x'' = a**2 k(0) (v_d t - x) - m gamma (x' - v_d) - f(x'), k(0) = (H/G + 1/kappa_d)**-1.
+    f_d(t) = a**2 k(0) (v_d t - x) against scipy's Radau at 1e-10, within the scheme's O(dt)."""
+    cfg = make_config(N=8, Ly=4, geometry="slab", theta=1.0, delta=0.0, t_total=2e-4, output_interval=1e-6,
+                      dt=1e-8)
+    ds = sc.run(cfg)
+    law = cfg.contact_law
+    k0 = cfg.a**2 * uniform_stiffness(cfg)
+    g = cfg.radiation_damping_rate
+
+    def rhs(t, y):
+        x, u = y
+        return [u, (k0 * (cfg.v_d * t - x) - cfg.m * g * (u - cfg.v_d) - float(law.force(u, cfg.v0))) / cfg.m]
+
+    t = ds.time.values
+    sol = solve_ivp(rhs, (0, t[-1]), [0.0, 0.0], method="Radau", rtol=1e-10, atol=1e-20, dense_output=True)
+    # f_d is the mean over each output interval: compare with the interval mean of the exact force
+    tt = np.linspace(t - 1e-6, t, 21)
+    exact = np.mean(k0 * (cfg.v_d * tt - sol.sol(tt.ravel())[0].reshape(tt.shape)), axis=0)
+    assert np.max(np.abs(ds.f_d.values - exact)) < 2e-3 * np.max(np.abs(exact))
+    assert ds.attrs["check_energy_balance_passed"] == 1
+
+
+@pytest.mark.parametrize("geometry", ["chain2d", "slab", "halfspace"])
+def test_energy_balance_with_random_contacts(geometry):
+    """Stick-slip on a 16 x 8 interface: the stored energy changes by the drive's work minus what
+    damping and contacts dissipate (results.checks) within the scheme's O(dt)."""
+    ds = sc.run(dict(N=16, Ly=8, geometry=geometry, theta=0.3, t_total=1e-3, start="steady"))
+    assert ds.attrs["check_energy_balance_passed"] == 1, ds.attrs["message"]
+    assert ds.attrs["check_energy_balance"] < 1e-3
+    assert np.isfinite(ds.attrs["mu_star"]) and ds.sizes["block"] == 128
+
+
+def test_geometry_keys_keep_chain_member_ids_and_name_bad_values():
+    """geometry = 'chain' and Ly = 1 are the defaults: left out of ids and TOML (stores stay valid);
+    bad combinations name the key and what is allowed."""
+    cfg = make_config()
+    assert member_id(cfg) == member_id(make_config(geometry="chain", Ly=1))
+    assert "geometry" not in cfg.to_toml() and "Ly" not in cfg.to_toml()
+    two_d = make_config(geometry="slab", Ly=4, N=8)
+    assert member_id(two_d) != member_id(two_d.with_updates(geometry="halfspace"))
+    assert 'geometry = "slab"' in two_d.to_toml()
+    for bad, words in [(dict(Ly=4), "'Ly' has value 4; expected 1 with geometry = 'chain'"),
+                       (dict(geometry="slab", dead_weight=0.9), "'dead_weight'"),
+                       (dict(geometry="slab", N=8, E=4e7, dt=3e-8), "dt*omega_max"),
+                       (dict(geometry="torus"), "'geometry'"),
+                       (dict(geometry="chain2d", Ly=0), "'Ly'")]:
+        with pytest.raises(ConfigError, match=words.replace("*", r"\*").replace("(", r"\(")):
+            make_config(**bad)
+
+
+def test_stable_step_bound_is_the_grid_maximum():
+    """Config.omega_max for the slab is sqrt(a**2 max k / m) over the whole rfft2 grid."""
+    cfg = make_config(geometry="slab", N=16, Ly=8)
+    assert cfg.omega_max == pytest.approx(math.sqrt(elastic_kernel(cfg).max() / cfg.m), rel=1e-12)
+    st = initial_state(build_system(cfg))
+    assert isinstance(st, State) and st.x.size == 128
