@@ -1,9 +1,13 @@
-"""Issue 13 groundwork: the cost of the slab's elastic force per step against L, beside its floor.
+"""Issue 13: the cost of one step of the 2-D geometries against L, beside the FFT floor.
 
 The floor is one rfft2 + irfft2 pair of an L x L float64 field (scipy.fft, one thread); the force
 (:func:`slipchain.model.elastic.elastic_force`) adds the subtraction of the drive and the
-multiplication by k(q). Prints one row per L: microseconds per call (best of 5 repeats) and the
-ratio, measured side by side in one process.
+multiplication by k(q); the slab step is a whole engine step (``CPUBackend.advance`` on one
+L x L slab, theta = 0.3, steady start: FFT pair, velocity update, contact solve, positions and
+sums), after a warm-up of 2e7/L**2 steps (at least 50) that leaves the steady start's transient;
+the chain2d step the same for the 2-D chains (no FFT). Prints one row per L: microseconds
+per call or step (best of 3-5 repeats) and the ratios to the floor, measured side by side in one
+process.
 
     .venv/bin/python benchmarks/fft_floor.py [--max-L 1024]
 """
@@ -17,7 +21,20 @@ import timeit
 import numpy as np
 import scipy.fft as sfft
 
+from slipchain.engine.backends import Batch, CPUBackend
+from slipchain.model.config import make_config
 from slipchain.model.elastic import elastic_force, slab_kernel, wavenumbers
+from slipchain.model.system import build_system, initial_state
+
+
+def step_cost(geometry: str, L: int, steps: int) -> float:
+    """Seconds per engine step of one L x L realisation (best of 3 chunks of ``steps``)."""
+    cfg = make_config(geometry=geometry, N=L, Ly=L, theta=0.3, start="steady")
+    system = build_system(cfg)
+    batch = Batch.pack([system], [initial_state(system)])
+    backend = CPUBackend()
+    backend.advance(batch, 1, max(50, int(2e7 / (L * L))))  # compile, and slide into the stick-slip state
+    return min(timeit.repeat(lambda: backend.advance(batch, 1, steps), number=1, repeat=3)) / steps
 
 
 def main() -> None:
@@ -26,8 +43,8 @@ def main() -> None:
     args = ap.parse_args()
     a, G, H, kappa = 1e-4, 1e7 / 3, 5e-4, 333.0 / 1e-8
     print(f"# {platform.processor() or platform.machine()}, numpy {np.__version__}")
-    print("| L | rfft2+irfft2 (us) | elastic_force (us) | ratio |")
-    print("|---|---|---|---|")
+    print("| L | rfft2+irfft2 (us) | elastic_force (us) | ratio | slab step (us) | ratio | chain2d step (us) | ratio |")
+    print("|---|---|---|---|---|---|---|---|")
     L = 32
     while L <= args.max_L:
         rng = np.random.default_rng(0)
@@ -36,7 +53,11 @@ def main() -> None:
         n = max(3, int(2e6 / (L * L)))
         floor = min(timeit.repeat(lambda: sfft.irfft2(sfft.rfft2(u), s=u.shape), number=n, repeat=5)) / n
         force = min(timeit.repeat(lambda: elastic_force(u, 1e-9, k, a), number=n, repeat=5)) / n
-        print(f"| {L} | {floor * 1e6:.1f} | {force * 1e6:.1f} | {force / floor:.2f} |")
+        steps = max(3, int(2e5 / (L * L)))
+        slab = step_cost("slab", L, steps)
+        chain2d = step_cost("chain2d", L, steps)
+        print(f"| {L} | {floor * 1e6:.1f} | {force * 1e6:.1f} | {force / floor:.2f} | {slab * 1e6:.1f} | "
+              f"{slab / floor:.2f} | {chain2d * 1e6:.1f} | {chain2d / floor:.2f} |", flush=True)
         L *= 2
 
 

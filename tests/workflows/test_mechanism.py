@@ -68,6 +68,28 @@ def test_slip_events_on_a_known_space_time_pattern():
     assert ev["event_slip"].values[order][2] == pytest.approx(slip_c, rel=1e-6)
 
 
+def test_slip_events_in_two_dimensions_wrap_in_x_and_y():
+    """Issue 13: clusters in (t, x, y) on an 8 x 6 periodic interface (block ix*6 + iy): one event
+    wrapping across both edges, one touching it only diagonally (a separate event: face
+    connectivity), and their area and moment G a**2 sum(u dt)."""
+    lx, ly, a, G = 8, 6, 1e-4, 3.3e6
+    u = np.full((40, lx, ly), 0.5 * V_D)
+    u[5:8, 7, 5] = 5 * V_D     # event A: the corner block, and its periodic neighbours in x and y
+    u[6:9, 0, 5] = 5 * V_D     #   x wraps 7 -> 0
+    u[6:7, 7, 0] = 5 * V_D     #   y wraps 5 -> 0
+    u[20:22, 3, 3] = 4 * V_D   # event B
+    u[22:23, 4, 4] = 4 * V_D   # diagonal to B, one sample later: event C
+    field = _field(u.reshape(40, lx * ly)).assign_attrs(Lx=lx, Ly=ly, a=a, G=G)
+    ev = slip_events(field)
+    order = np.argsort(ev["event_start"].values)
+    assert ev.sizes["event"] == 3
+    assert ev["event_size"].values[order].tolist() == [3, 1, 1]
+    slip_a = (3 + 3 + 1) * 5 * V_D * 1e-6
+    assert ev["event_slip"].values[order][0] == pytest.approx(slip_a, rel=1e-6)
+    assert ev["event_area"].values[order][0] == pytest.approx(3 * a * a)
+    assert ev["event_moment"].values[order][0] == pytest.approx(G * a * a * slip_a, rel=1e-6)
+
+
 def test_psd_of_a_sinusoid_plus_noise():
     rng = np.random.default_rng(2)
     fs, n, f0, amp, sigma = 1e6, 2**15, 37_500.0, 3e-4, 1e-4

@@ -146,8 +146,9 @@ def state_from_run(run: xr.Dataset) -> State:
 
 
 def record_field(system: System, state: State, duration: float, interval: float, *,
-                 backend: str | BackendName = BackendName.CPU) -> xr.Dataset:
-    """Continue from ``state`` for ``duration`` s, sampling u_i(t), f_d(t) and A(t) every ``interval`` s.
+                 backend: str | BackendName = BackendName.CPU, positions: bool = False) -> xr.Dataset:
+    """Continue from ``state`` for ``duration`` s, sampling u_i(t), f_d(t) and A(t) every ``interval`` s
+    (and, with ``positions``, the displacement field x_i - v_d t as ``slip_field``).
 
     The engine's time loop with a :class:`~slipchain.engine.observers.FieldRecorder` observing
     chunks of one sample each. Raises FloatingPointError if the state goes non-finite.
@@ -156,7 +157,7 @@ def record_field(system: System, state: State, duration: float, interval: float,
     steps = max(1, int(round(interval / cfg.dt)))
     n = max(2, int(round(duration / (steps * cfg.dt))))
     batch = Batch.pack([system], [state.copy()])
-    field = FieldRecorder(system, n)
+    field = FieldRecorder(system, n, positions=positions)
     control = RowControl(limit=n)
     drive(get_backend(backend), batch, [control], sample_steps=steps, chunk=1, interval=steps * cfg.dt,
           observers=[field])
@@ -164,41 +165,60 @@ def record_field(system: System, state: State, duration: float, interval: float,
         raise FloatingPointError(f"non-finite state during the field recording at step {int(batch.status[0])}")
     if control.status == Status.INTERRUPTED:
         raise KeyboardInterrupt
+    extra = {} if field.x is None else {
+        "slip_field": (("time", "block"), field.x, {"units": "m", "long_name": "x_i - v_d t (instantaneous)"})}
     return xr.Dataset(
-        {"u": (("time", "block"), field.u, {"units": "m/s", "long_name": "interface block velocity (instantaneous)"}),
+        {**extra,
+         "u": (("time", "block"), field.u, {"units": "m/s", "long_name": "interface block velocity (instantaneous)"}),
          "f_d_instant": ("time", field.f_d, {"units": "N", "long_name": "driving force per block, instantaneous"}),
          "acoustic": ("time", field.acoustic, {"units": "N", "long_name": "total contact force on the substrate"})},
         coords={"time": ("time", field.t, {"units": "s"}), "block": np.arange(cfg.n_blocks)},
-        attrs={"interval": steps * cfg.dt, "v_d": cfg.v_d, "K_T": cfg.K_T, "theta": system.theta_realised},
+        attrs={"interval": steps * cfg.dt, "v_d": cfg.v_d, "K_T": cfg.K_T, "theta": system.theta_realised,
+               "geometry": cfg.geometry, "Lx": cfg.N, "Ly": cfg.Ly, "a": cfg.a, "G": cfg.G},
     )
 
 
-def slip_events(field: xr.Dataset, threshold: float = SLIP_THRESHOLD) -> xr.Dataset:
-    """Connected clusters of slipping blocks in space and time (module docstring)."""
-    u = field["u"].values.astype(float)
-    dt = float(field.attrs["interval"])
-    slipping = u > threshold * float(field.attrs["v_d"])
-    labels, n = ndimage.label(slipping)  # 4-connectivity in (time, block)
-    if n:
-        # periodic chain: a cluster crossing block N-1 -> 0 is one event
-        parent = np.arange(n + 1)
+def _periodic_labels(slipping: np.ndarray, periodic_axes: tuple[int, ...]) -> np.ndarray:
+    """Connected clusters of ``slipping`` (face-connected: 4 neighbours in (time, block), 6 in
+    (time, x, y)), merged across the periodic faces of ``periodic_axes`` (union-find)."""
+    labels, n = ndimage.label(slipping)
+    if not n:
+        return labels
+    parent = np.arange(n + 1)
 
-        def find(a):
-            while parent[a] != a:
-                parent[a] = parent[parent[a]]
-                a = parent[a]
-            return a
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
 
-        both = slipping[:, 0] & slipping[:, -1]
-        for a, b in zip(labels[both, 0], labels[both, -1]):
+    for axis in periodic_axes:
+        first, last = np.take(labels, 0, axis=axis), np.take(labels, -1, axis=axis)
+        both = (first > 0) & (last > 0)
+        for a, b in zip(first[both], last[both]):
             ra, rb = find(a), find(b)
             if ra != rb:
                 parent[max(ra, rb)] = min(ra, rb)
-        roots = np.array([find(i) for i in range(n + 1)])
-        labels = roots[labels]
+    roots = np.array([find(i) for i in range(n + 1)])
+    return roots[labels]
+
+
+def slip_events(field: xr.Dataset, threshold: float = SLIP_THRESHOLD) -> xr.Dataset:
+    """Connected clusters of slipping blocks in space and time (module docstring); on a 2-D interface
+    (``Ly`` > 1 in the field's attrs) clusters in (t, x, y), periodic in x and y, with their area
+    and seismic moment M0 = G a**2 sum(u dt) (issue 13)."""
+    u = field["u"].values.astype(float)
+    dt = float(field.attrs["interval"])
+    lx, ly = int(field.attrs.get("Lx", u.shape[1])), int(field.attrs.get("Ly", 1))
+    two_d = ly > 1
+    slipping = u > threshold * float(field.attrs["v_d"])
+    if two_d:
+        slipping = slipping.reshape(-1, lx, ly)
+    labels = _periodic_labels(slipping, (1, 2) if two_d else (1,)).reshape(u.shape)
     ids = np.unique(labels[labels > 0])
-    rows: dict[str, list[Any]] = {k: [] for k in ("size", "duration", "slip", "force", "start", "first_block",
-                                                   "truncated")}
+    keys = ("size", "duration", "slip", "force", "start", "first_block", "truncated") + (("area", "moment") if two_d
+                                                                                        else ())
+    rows: dict[str, list[Any]] = {k: [] for k in keys}
     times = field["time"].values
     for i in ids:
         ti, bi = np.nonzero(labels == i)
@@ -210,11 +230,17 @@ def slip_events(field: xr.Dataset, threshold: float = SLIP_THRESHOLD) -> xr.Data
         rows["start"].append(times[ti.min()])
         rows["first_block"].append(int(bi[np.argmin(ti)]))
         rows["truncated"].append(bool(ti.min() == 0 or ti.max() == u.shape[0] - 1))
+        if two_d:
+            a = float(field.attrs["a"])
+            rows["area"].append(np.unique(bi).size * a * a)
+            rows["moment"].append(float(field.attrs["G"]) * a * a * slip)
     units = {"size": ("blocks", "distinct blocks that slipped"), "duration": ("s", "duration"),
              "slip": ("m", "total slip, sum of u dt over the event"),
              "force": ("N", "released force K_T * slip (proxy)"), "start": ("s", "start time"),
              "first_block": ("", "a block slipping at the start"),
-             "truncated": ("", "touches the start or end of the recording")}
+             "truncated": ("", "touches the start or end of the recording"),
+             "area": ("m^2", "area that slipped, size * a**2"),
+             "moment": ("N m", "seismic moment G a**2 sum(u dt)")}
     return xr.Dataset({f"event_{k}": ("event", np.asarray(v), {"units": units[k][0], "long_name": units[k][1]})
                        for k, v in rows.items()},
                       attrs={"slip_threshold_v_d": threshold})

@@ -50,6 +50,32 @@ def fig6(
         fail(str(e))
 
 
+@figure_app.command("fig6-3d")
+def fig6_3d(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over geometry, theta and v_d (presets/fig6-3d.toml).")],
+    out_dir: OutOpt,
+) -> None:
+    """Fig. 6 in 3-D: mu_star versus theta for the chain, the 2-D chains and the slab, the load effect against the slab's thickness; report.md, table.csv, drops.csv."""
+    try:
+        wrote(_figures().fig6_3d(store, out_dir, command=f"slipchain figure fig6-3d --store {store} --out {out_dir}"))
+    except SweepError as e:
+        fail(str(e))
+
+
+@figure_app.command("slip-maps")
+def slip_maps(
+    run: Annotated[Path, typer.Option("--run", help="A run file (NetCDF) of a 2-D geometry (Ly >= 2).")],
+    out_dir: OutOpt,
+    duration: Annotated[float, typer.Option("--duration", min=1e-9, help="Seconds to record after the run's end.")] = 5e-3,
+    interval: Annotated[float, typer.Option("--interval", min=1e-12, help="Sampling interval (s).")] = 1e-5,
+) -> None:
+    """Slip clusters in (t, x, y) of a 2-D run continued from its end, and maps of x - v_d t before and after the largest (events.csv)."""
+    try:
+        wrote(_figures().slip_maps(run, out_dir, duration, interval))
+    except ConfigError as e:
+        fail(str(e))
+
+
 @figure_app.command("tester")
 def tester(
     runs: Annotated[Path, typer.Option("--runs", help="Output directory of `slipchain tester analyze` (its runs.csv).")],

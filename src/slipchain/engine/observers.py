@@ -62,14 +62,16 @@ class Recorder:
 
 class FieldRecorder:
     """Instantaneous fields of one row after every chunk: the interface velocities u_i(t), the
-    driving force f_d(t) = K_d (v_d t - <X>) and the acoustic proxy A(t) = sum_i f(u_i, v*_i)."""
+    driving force f_d(t) = K_d (v_d t - <X>) (a**2 k(0) (v_d t - <x>) for the slab and half-space)
+    and the acoustic proxy A(t) = sum_i f(u_i, v*_i); with ``positions``, also x_i - v_d t."""
 
-    def __init__(self, system, n_max: int, row: int = 0):
+    def __init__(self, system, n_max: int, row: int = 0, positions: bool = False):
         self.system = system
         self.row = row
         cfg = system.config
         self.t = np.empty(n_max)
         self.u = np.empty((n_max, cfg.n_blocks), dtype=np.float32)
+        self.x = np.empty((n_max, cfg.n_blocks)) if positions else None
         self.f_d = np.empty(n_max)
         self.acoustic = np.empty(n_max)
         self.k = 0
@@ -84,7 +86,12 @@ class FieldRecorder:
         k = self.k
         self.t[k] = batch.step[self.row] * cfg.dt
         self.u[k] = uk
-        self.f_d[k] = cfg.K_d * (cfg.v_d * self.t[k] - batch.X[self.row].mean())
+        if self.x is not None:
+            self.x[k] = batch.x[self.row] - cfg.v_d * self.t[k]
+        if batch.kernel is not None:  # slab, half-space: the uniform mode of the elastic force
+            self.f_d[k] = batch.kernel[self.row, 0, 0] * (cfg.v_d * self.t[k] - batch.x[self.row].mean())
+        else:
+            self.f_d[k] = cfg.K_d * (cfg.v_d * self.t[k] - batch.X[self.row].mean())
         self.acoustic[k] = float(np.sum(law.force(uk[sites], vstar))) if sites.size else 0.0
         self.k += 1
 

@@ -133,9 +133,10 @@ class Config(BaseModel):
             if isinstance(value, float) and not math.isfinite(value):
                 raise ValueError(_message(key, value, ALLOWED[key] + ", finite"))
         if round(self.theta * self.n_blocks) < 1:
+            n = "N" if self.Ly == 1 else "N*Ly"
             raise ValueError(
-                _message("theta", self.theta, f"theta*N*Ly >= 0.5 so that N_c = round(theta*N*Ly) >= 1 (N = {self.N}, "
-                         f"Ly = {self.Ly})")
+                _message("theta", self.theta, f"theta*{n} >= 0.5 so that N_c = round(theta*{n}) >= 1 (N = {self.N}"
+                         + (f", Ly = {self.Ly})" if self.Ly > 1 else ")"))
             )
         self._check_geometry()
         if self.output_interval < self.dt:

@@ -85,12 +85,12 @@ def run_members(configs: list[Config], backend: str = BackendName.CPU, checkpoin
 
 
 def batches(members: list[Member], size: int) -> list[list[Member]]:
-    """Members grouped for :func:`run_members`: equal N, dt and output interval, at most ``size`` each,
+    """Members grouped for :func:`run_members`: equal N, Ly, geometry, dt and output interval, at most ``size`` each,
     similar expected cost together (the input order, by decreasing cost, is kept)."""
     groups: dict[tuple, list[Member]] = {}
     for m in members:
         c = m.config
-        groups.setdefault((c.N, c.dt, c.sample_steps), []).append(m)
+        groups.setdefault((c.N, c.Ly, c.geometry, c.dt, c.sample_steps), []).append(m)
     out = []
     for g in groups.values():
         out += [g[i:i + size] for i in range(0, len(g), size)]
@@ -109,9 +109,11 @@ def error_dataset(member: Member, exc: BaseException) -> xr.Dataset:
 
 
 def expected_cost(member: Member) -> float:
-    """Relative run time: blocks times contacts per block, times steps per simulated second."""
+    """Relative run time: blocks times contacts per block (plus the FFT's share for the slab and
+    half-space, about as much again), times steps per simulated second."""
     c = member.config
-    return c.N * (c.theta + 0.05) * (2e-8 / c.dt)
+    fft = 0.3 if c.geometry in ("slab", "halfspace") else 0.0
+    return c.n_blocks * (c.theta + 0.05 + fft) * (2e-8 / c.dt)
 
 
 @dataclass

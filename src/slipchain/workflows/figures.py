@@ -49,6 +49,52 @@ def fig6(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
     return plot_fig6(fig6_figure_data(sweep_dataset(store, {"theta", "eta_c", "v_d"}, "fig6")), out)
 
 
+def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "", wall: str = "") -> list[Path]:
+    """Fig. 6 in 3-D (issue 13): the figure, report.md, table.csv (seed means) and drops.csv (the load
+    effect per geometry, size and velocity) from a store sweeping geometry, theta and v_d."""
+    from ..analysis.geometry import fig6_3d_data, report_markdown
+    from ..plots.geometry import plot_fig6_3d
+    from ..results.io import atomic_write
+
+    table, drop, attrs = fig6_3d_data(sweep_dataset(store, {"geometry", "theta", "v_d"}, "the Fig. 6-in-3-D figure"))
+    paths = plot_fig6_3d(table, drop, attrs, out)
+    for name, frame in (("table.csv", table), ("drops.csv", drop)):
+        with atomic_write(Path(out) / name) as tmp:
+            frame.to_csv(tmp, index=False, float_format="%.6g")
+        paths.append(Path(out) / name)
+    with atomic_write(Path(out) / "report.md") as tmp:
+        tmp.write_text(report_markdown(table, drop, attrs, command=command, wall=wall))
+    return paths + [Path(out) / "report.md"]
+
+
+def slip_maps(run: str | os.PathLike, out: str | os.PathLike, duration: float, interval: float) -> list[Path]:
+    """Continue a 2-D run (a run file) for ``duration`` s recording u and x every ``interval`` s;
+    draw the maps around its largest slip event; write events.csv (every cluster in (t, x, y))."""
+    from ..analysis.mechanism import record_field, slip_events, state_from_run
+    from ..model.config import ConfigError, config_from_toml
+    from ..model.system import build_system
+    from ..plots.geometry import plot_slip_maps
+    from ..results.io import atomic_write
+
+    try:
+        ds = xr.open_dataset(run)
+    except (OSError, ValueError) as err:
+        raise ConfigError(f"--run {str(run)!r} is not a run file: {err}") from None
+    with ds:
+        cfg = config_from_toml(ds.attrs["config"])
+        state = state_from_run(ds.load())
+    if cfg.Ly < 2:
+        raise ConfigError(f"--run {str(run)!r} has Ly = {cfg.Ly}; slip maps need a 2-D interface (Ly >= 2)")
+    field = record_field(build_system(cfg), state, duration, interval, positions=True)
+    events = slip_events(field)
+    if events.sizes.get("event", 0) == 0:
+        raise ConfigError(f"no block slipped faster than 2 v_d in {duration:g} s: record longer (--duration)")
+    paths = plot_slip_maps(field, events, out)
+    with atomic_write(Path(out) / "events.csv") as tmp:
+        events.to_dataframe().to_csv(tmp, float_format="%.6g")
+    return paths + [Path(out) / "events.csv"]
+
+
 def velocity(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
     return plot_velocity(velocity_figure_data(sweep_dataset(store, {"v_d"}, "the velocity figure")), out)
 

@@ -1,11 +1,11 @@
-"""Backends that advance a batch of realisations: ``base`` (batch layout, protocol), ``cpu`` (numba), ``cuda`` (numba.cuda)."""
+"""Backends that advance a batch of realisations: ``base`` (batch layout, protocol), ``cpu`` (numba), ``spectral`` (slab FFT), ``host`` (the CPU backend), ``cuda`` (numba.cuda)."""
 
 from __future__ import annotations
 
 from enum import StrEnum
 
 from .base import Backend, Batch, ChunkOutput, kernel_params
-from .cpu import CPUBackend
+from .host import CPUBackend
 
 
 class BackendName(StrEnum):

@@ -18,7 +18,6 @@ import numpy as np
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, N_ACC, N_CACC, N_OUT,
                       NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_KLY, P_KY, P_LAT, P_LY, TAYLOR_MAX, Y_LOG, Y_P, Y_Q,
                       compile_for)
-from .base import Batch, ChunkOutput
 
 _scheme = compile_for(lambda name, inline: nb.njit(cache=True, inline="always" if inline else "never"))
 exp_taylor = _scheme.exp_taylor
@@ -230,23 +229,4 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
         acc[row, A_WCONTACT] += w_contact
 
 
-class CPUBackend:
-    """The numba kernel on one CPU core: ``advance(batch, n_samples, sample_steps)``."""
-
-    name = "cpu"
-
-    def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
-        if batch.kernel is not None:  # slab, half-space: the elastic force by FFT
-            from . import spectral
-
-            return spectral.advance(batch, n_samples, sample_steps)
-        b = batch.x.shape[0]
-        out = np.zeros((b, n_samples, N_OUT))
-        acc = np.zeros((b, N_ACC))
-        cacc = np.zeros((b, N_CACC, batch.sites.shape[1]))
-        advance(batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar,
-                batch.n_contacts, batch.ysolve, n_samples, sample_steps, out, acc, cacc, batch.status)
-        return ChunkOutput(out, acc, cacc)
-
-
-__all__ = ["CPUBackend", "advance", "block_update", "newton_pass", "solve_contact", "solve_contact_bracketed"]
+__all__ = ["advance", "block_update", "newton_pass", "solve_contact", "solve_contact_bracketed"]

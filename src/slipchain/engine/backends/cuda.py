@@ -231,7 +231,7 @@ def advance_kernel(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n
 
 
 class CUDABackend:
-    """Same interface as :class:`~slipchain.engine.backends.cpu.CPUBackend`: ``advance(batch, n_samples, sample_steps)``."""
+    """Same interface as :class:`~slipchain.engine.backends.host.CPUBackend`: ``advance(batch, n_samples, sample_steps)``."""
 
     name = "gpu"
 

@@ -11,7 +11,8 @@ slider's body moving with the drive). Equation of motion of block i::
 Step n -> n+1 (the chain's scheme, :mod:`slipchain.engine.scheme`, with the elastic force in
 place of the springs):
 
-1. F_el from x^n: one batched ``rfft2``/``irfft2`` pair for all rows (scipy.fft);
+1. F_el from x^n: one batched ``rfft2``/``irfft2`` pair for all rows (scipy.fft), the drive's
+   uniform displacement added to the q = 0 mode alone (a**2 k(0) v_d t on every block);
 2. u^{n+1} = u^n + dt/m (F_el - m gamma (u^n - v_d)) for every block (numba, :func:`_step`);
 3. contact blocks: the chain's implicit contact solve (:func:`.cpu._contacts`);
 4. x^{n+1} = x^n + dt u^{n+1}; the works: drive a**2 k(0) (N v_d t - sum x^n) v_d dt (the uniform
@@ -28,15 +29,16 @@ import math
 import numba as nb
 import numpy as np
 
-from ..scheme import A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN, O_XUMEAN, P_C, P_DT, P_VD
+from ..scheme import FASTMATH, A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN, O_XUMEAN, P_C
 from .base import Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _refresh_solver, row_parameters
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _step(F, x, u, step, params, k0, sites, vstar, n_contacts, ysolve, cacc, acc, fd, status, un, damp, rk, ra, uk,
           fk, ok):
-    """Steps 2-4 of the module docstring for every live row, given the elastic force F (B, N)."""
+    """Steps 2-4 of the module docstring for every live row, given -IFFT[a**2 k FFT(x)] in F (B, N)
+    (the drive, uniform, enters through k(0) = ``k0`` alone)."""
     nb_rows, n = x.shape
     for row in range(nb_rows):
         if status[row] >= 0:
@@ -46,9 +48,10 @@ def _step(F, x, u, step, params, k0, sites, vstar, n_contacts, ysolve, cacc, acc
         ur = u[row]
         Fr = F[row]
         sx = 0.0
+        f_drive = k0[row] * vd * (step[row] * dt)  # the uniform mode's share of the drive, a**2 k(0) v_d t
         for i in range(n):
             d = -meta * (ur[i] - vd)
-            un[i] = ur[i] + dtm * (Fr[i] + d)
+            un[i] = ur[i] + dtm * (Fr[i] + f_drive + d)
             damp[i] = d
             sx += xr[i]
         nc = n_contacts[row]
@@ -97,7 +100,7 @@ def advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkO
     lx, ly = batch.shape
     kern = batch.kernel
     k0 = np.ascontiguousarray(kern[:, 0, 0])
-    vd, dt = batch.params[:, P_VD], batch.params[:, P_DT]
+    neg = -kern
     out = np.zeros((b, n_samples, N_OUT))
     acc = np.zeros((b, N_ACC))
     cmax = batch.sites.shape[1]
@@ -111,10 +114,9 @@ def advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkO
         _refresh_solver(batch.n_contacts[row], batch.ysolve[row], batch.params[row, P_C])
     for s in range(n_samples):
         for _ in range(sample_steps):
-            drive = vd * (batch.step * dt)
-            d = grid - drive[:, None, None]
-            F = fft.irfft2(kern * fft.rfft2(d, axes=(1, 2)), s=(lx, ly), axes=(1, 2))
-            np.negative(F, out=F)
+            spec = fft.rfft2(grid, axes=(1, 2))
+            spec *= neg
+            F = fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True)
             _step(F.reshape(b, n), batch.x, batch.u, batch.step, batch.params, k0, batch.sites, batch.vstar,
                   batch.n_contacts, batch.ysolve, cacc, acc, fd, batch.status, un, damp, rk, ra, uk, fk, ok)
         _end_sample(batch.x, batch.ysolve, batch.params, batch.n_contacts, batch.status, batch.step, fd, out, s,
