@@ -56,6 +56,9 @@ CASES = {
     # the automatic dead-weight length: 50 one-sample ramp chunks, first decision at t_decide (save 53),
     # cut after save 60 while it still drifts, on to t_max
     "dead weight, automatic length": dict(N=31, theta=0.5, dead_weight=0.7, t_decide=2e-3, t_max=0.01, seed=1),
+    # issue 13: the 2-D chains and the slab (FFT loop) resume bit for bit too
+    "chain2d": dict(N=8, Ly=6, geometry="chain2d", theta=0.5, t_total=2.5e-3, seed=2),
+    "slab": dict(N=8, Ly=6, geometry="slab", theta=0.5, t_total=2.5e-3, seed=2),
 }
 SAVES = {"dead weight, automatic length": 60}
 

@@ -144,3 +144,10 @@ def test_stable_step_bound_is_the_grid_maximum():
     assert cfg.omega_max == pytest.approx(math.sqrt(elastic_kernel(cfg).max() / cfg.m), rel=1e-12)
     st = initial_state(build_system(cfg))
     assert isinstance(st, State) and st.x.size == 128
+
+
+def test_gpu_backend_refuses_a_2d_geometry_with_the_reason():
+    """The CUDA kernel is the chain's: a 2-D geometry on it is an error that says so (numba's CUDA
+    simulator stands in for the GPU here, as in tests/physics/test_backends.py)."""
+    with pytest.raises(ValueError, match="CPU backend only"):
+        sc.run(dict(N=8, Ly=4, geometry="chain2d", t_total=1e-5), backend="gpu")
