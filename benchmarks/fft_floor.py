@@ -4,7 +4,9 @@ The floor is one rfft2 + irfft2 pair of an L x L float64 field (scipy.fft, one t
 (:func:`slipchain.model.elastic.elastic_force`) adds the subtraction of the drive and the
 multiplication by k(q); the slab step is a whole engine step (``CPUBackend.advance`` on one
 L x L slab, theta = 0.3, steady start: FFT pair, velocity update, contact solve, positions and
-sums), after a warm-up of 2e7/L**2 steps (at least 50) that leaves the steady start's transient;
+sums), after a warm-up of WARM_UP = 10,000 steps (0.2 ms simulated; 2,500 at L = 1024) that leaves
+the steady start's transient, in which contacts fall back to the bracketed solver and a step costs
+up to 2.5 times more (L = 256: 1.9 ms after 300 steps, 0.7 ms after 10,000);
 the chain2d step the same for the 2-D chains (no FFT). Prints one row per L: microseconds
 per call or step (best of 3-5 repeats) and the ratios to the floor, measured side by side in one
 process.
@@ -27,13 +29,16 @@ from slipchain.model.elastic import elastic_force, slab_kernel, wavenumbers
 from slipchain.model.system import build_system, initial_state
 
 
+WARM_UP = 10_000
+
+
 def step_cost(geometry: str, L: int, steps: int) -> float:
     """Seconds per engine step of one L x L realisation (best of 3 chunks of ``steps``)."""
     cfg = make_config(geometry=geometry, N=L, Ly=L, theta=0.3, start="steady")
     system = build_system(cfg)
     batch = Batch.pack([system], [initial_state(system)])
     backend = CPUBackend()
-    backend.advance(batch, 1, max(50, int(2e7 / (L * L))))  # compile, and slide into the stick-slip state
+    backend.advance(batch, 1, WARM_UP if L <= 512 else WARM_UP // 4)  # compile, and leave the start's transient
     return min(timeit.repeat(lambda: backend.advance(batch, 1, steps), number=1, repeat=3)) / steps
 
 

@@ -146,8 +146,34 @@ def test_stable_step_bound_is_the_grid_maximum():
     assert isinstance(st, State) and st.x.size == 128
 
 
-def test_gpu_backend_refuses_a_2d_geometry_with_the_reason():
-    """The CUDA kernel is the chain's: a 2-D geometry on it is an error that says so (numba's CUDA
+def test_gpu_backend_refuses_chain2d_and_needs_cupy_for_the_slab():
+    """The CUDA kernel is the chain's: chain2d on it is an error that says so; the slab goes to the
+    array code on CuPy, which names the extra to install where CuPy is missing (numba's CUDA
     simulator stands in for the GPU here, as in tests/physics/test_backends.py)."""
     with pytest.raises(ValueError, match="CPU backend only"):
         sc.run(dict(N=8, Ly=4, geometry="chain2d", t_total=1e-5), backend="gpu")
+    try:
+        import cupy  # noqa: F401
+    except ImportError:
+        with pytest.raises(ImportError, match="gpu-fft"):
+            sc.run(dict(N=8, Ly=4, geometry="slab", t_total=1e-5), backend="gpu")
+
+
+@pytest.mark.parametrize("geometry", ["slab", "halfspace"])
+def test_array_code_agrees_with_the_numba_loop(geometry):
+    """The slab written once in array operations (engine/backends/arrays.py: the code CuPy runs on a
+    GPU), here on NumPy + scipy.fft, against the numba loop: two independent implementations, the
+    same run to 1e-8 (their contact solvers stop at different tolerances, ~1e-9 per step), a batch
+    of two rows with different theta and v_d at once."""
+    from slipchain.engine.backends.arrays import ArrayBackend
+
+    cfgs = [make_config(geometry=geometry, N=8, Ly=4, theta=th, v_d=v, t_total=1e-4, start="steady",
+                        output_interval=1e-5, seed=s) for th, v, s in ((0.5, 1e-3, 1), (1.0, 3e-4, 2))]
+    systems = [build_system(c) for c in cfgs]
+    ref = sc.simulate_batch(systems)
+    got = sc.simulate_batch(systems, backend=ArrayBackend())
+    for a, b in zip(ref, got):
+        assert _rel(a.f_d.values, b.f_d.values) < 1e-8
+        assert np.max(np.abs(a.x.values - b.x.values)) < 1e-8 * np.max(np.abs(a.x.values))
+        assert abs(a.attrs["mu_star"] / b.attrs["mu_star"] - 1) < 1e-8
+        assert b.attrs["check_energy_balance_passed"] == 1

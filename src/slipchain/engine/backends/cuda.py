@@ -243,6 +243,7 @@ class CUDABackend:
         # True: a batch's device arrays and stream are kept from chunk to chunk (written to let
         # concurrent batches overlap; not yet measured on a GPU, so off: `bench_gpu.py --concurrent`)
         self.keep_buffers = keep_buffers
+        self._arrays = None  # the slab's array backend on CuPy, made on first use
 
     @staticmethod
     def default_threads(rows: int) -> int:
@@ -253,8 +254,14 @@ class CUDABackend:
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
         if batch.geometry != "chain":
-            raise ValueError(f"geometry = '{batch.geometry}' runs on the CPU backend only in this version "
-                             "(backend='cpu'); the GPU kernel is the chain's")
+            if batch.kernel is None:
+                raise ValueError(f"geometry = '{batch.geometry}' runs on the CPU backend only in this version "
+                                 "(backend='cpu'); the GPU kernel is the chain's, the slab's is CuPy's")
+            if self._arrays is None:  # slab, half-space: the array code on CuPy (cuFFT)
+                from .arrays import cupy_backend
+
+                self._arrays = cupy_backend()
+            return self._arrays.advance(batch, n_samples, sample_steps)
         b, n = batch.x.shape
         threads = self.threads or min(self.default_threads(b), max(1, n))
         in_shared = (SHARED_ARRAYS * n + threads) * 8 <= SHARED_BYTES and self.shared
