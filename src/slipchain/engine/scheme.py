@@ -50,11 +50,11 @@ LOG10_2 = math.log10(2.0)
 
 # Parameter columns in the (B, P) parameter array.
 P_K, P_KL, P_KT, P_KD, P_M, P_ML, P_META, P_VD, P_DT, P_AMP, P_C, P_ETAC, P_SLOW, P_FCONST = range(14)
-P_KY, P_KLY, P_LY, P_LAT = range(14, 18)
-N_PARAMS = 18  # P_FCONST: constant force on every UL block (dead-weight drive; 0 with the spring drive)
+P_KY, P_KLY, P_LY, P_LAT, P_FOLD = range(14, 19)
+N_PARAMS = 19  # P_FCONST: constant force on every UL block (dead-weight drive; 0 with the spring drive)
 # P_KY, P_KLY: IL and UL springs along y (G a, N_L G a; chain2d); P_LY: Ly; P_LAT: 1 for the 2-D
 # lattice stencil (chain2d), 0 for the chain. With the slab and half-space, P_META is m*gamma, gamma
-# the radiation damping rate (Config.radiation_damping_rate).
+# the radiation damping rate (Config.radiation_damping_rate). P_FOLD: 1 for integrator = 'fold'.
 
 # Output columns per sample and accumulator columns.
 O_FD, O_XMEAN, O_XUMEAN = range(3)  # mean f_d over the sample; mean x and mean X at its end
@@ -64,7 +64,8 @@ N_ACC = 3
 C_F, C_U, C_U2, C_SLOW = range(4)  # per-contact sums over steps: force, u, u^2, steps with |u| < slow
 N_CACC = 4
 Y_LOG, Y_P, Y_Q = range(3)  # per-contact solver state: y = log10(|u|/v*), p = 10**y, q = exp(-c y^2)
-N_YS = 3
+Y_FA, Y_FB = 3, 4  # integrator 'fold' (issue 12): the contact equation's folds (local max, min of H in y)
+N_YS = 5
 
 # LLVM may contract to FMA, reassociate sums and use reciprocals; never assume finite values
 # (the non-finite checks must keep working).
@@ -92,13 +93,20 @@ def solve_contact_bracketed(ra, a, b, c, y):
     """Root y of  a*10**y + b*exp(-c*y**2) = ra  (ra > 0, c > 0) by safeguarded Newton.
 
     The bracket [y_lo, y_hi] has H(y_lo) <= 0 <= H(y_hi) by construction:
-    y_hi = log10(ra/a); y_lo = min(y_hi - log10 2, -sqrt(ln(2b/ra)/c)).
+    y_hi = log10(ra/a); y_lo = min(y_hi - log10 2, -sqrt(ln(2b/ra)/c)); every y below y_lo has
+    H(y) <= 0 too, every y above y_hi H(y) > 0.
     """
     y_hi = math.log10(ra / a)
     y_lo = y_hi - LOG10_2
     lg = math.log(2.0 * b / ra)
     if lg > 0.0:
         y_lo = min(y_lo, -math.sqrt(lg / c))
+    return solve_on_bracket(ra, a, b, c, y, y_lo, y_hi)
+
+
+def solve_on_bracket(ra, a, b, c, y, y_lo, y_hi):
+    """Safeguarded Newton for H(y) = a*10**y + b*exp(-c*y**2) - ra on [y_lo, y_hi], H(y_lo) <= 0 <= H(y_hi),
+    from y (the midpoint if y is outside)."""
     if not (y_lo < y < y_hi):
         y = 0.5 * (y_lo + y_hi)
     for _ in range(200):
@@ -120,6 +128,37 @@ def solve_contact_bracketed(ra, a, b, c, y):
             return y_new
         y = y_new
     return y
+
+
+def solve_contact_fold(r, m_eff, b, c, vstar, y, p, q, ya, yb):
+    """:func:`solve_contact` for integrator = 'fold' (issue 12): when dt is above the unique-root
+    limit, H(y) = m_eff v* 10**y + b exp(-c y**2) - |r| has a local maximum at ``ya`` and a local
+    minimum at ``yb`` (the folds, fixed per contact and dt: :func:`fold_points`) and up to three
+    roots. The root on the branch the contact is on is kept (continuation: the lower, sticking
+    branch y < ya, or the upper, sliding branch y > yb); when that branch has no root any more (the
+    contact passed its fold), the contact jumps to the other branch: the limit of contacts that
+    relax infinitely fast. Without folds (ya >= yb) this is :func:`solve_contact`.
+    """
+    ra = abs(r)
+    if not (ya < yb) or ra < 1e-300 or c == 0.0:
+        return solve_contact(r, m_eff, b, c, vstar, y, p, q)
+    s = 1.0 if r > 0.0 else -1.0
+    a = m_eff * vstar
+    if y < 0.5 * (ya + yb):  # on the lower branch: keep it while its root exists (H(ya) >= 0)
+        lower = a * math.exp(LN10 * ya) + b * math.exp(-c * ya * ya) - ra >= 0.0
+    else:  # on the upper branch: keep it while its root exists (H(yb) <= 0)
+        lower = a * math.exp(LN10 * yb) + b * math.exp(-c * yb * yb) - ra > 0.0
+    y_hi = math.log10(ra / a)
+    if lower:
+        y_lo = y_hi - LOG10_2
+        lg = math.log(2.0 * b / ra)
+        if lg > 0.0:
+            y_lo = min(y_lo, -math.sqrt(lg / c))
+        y = solve_on_bracket(ra, a, b, c, y, min(y_lo, ya), ya)
+    else:
+        y = solve_on_bracket(ra, a, b, c, y, yb, max(y_hi, yb))
+    p = math.exp(LN10 * y)
+    return s * vstar * p, y, p, math.exp(-c * y * y)
 
 
 def taylor_newton_step(a, b, c, ra, y, p, q):
@@ -222,9 +261,50 @@ def row_parameters(p):
 
 # The scheme's functions in dependency order; those marked True are small enough to inline.
 FUNCTIONS: tuple[tuple[str, bool], ...] = (
-    ("exp_taylor", True), ("scaled_exp", True), ("solve_contact_bracketed", False), ("taylor_newton_step", True),
-    ("solve_contact", False), ("block_update", True), ("block_update_2d", True), ("row_parameters", True),
+    ("exp_taylor", True), ("scaled_exp", True), ("solve_on_bracket", False), ("solve_contact_bracketed", False),
+    ("taylor_newton_step", True), ("solve_contact", False), ("solve_contact_fold", False), ("block_update", True), ("block_update_2d", True), ("row_parameters", True),
 )
+
+
+def fold_points(a, b, c):
+    """The folds of the contact equation (:func:`solve_contact_fold`) for arrays a = m_eff v*,
+    b = dt epsilon f0 and a scalar c > 0: (ya, yb) with dH/dy < 0 exactly on (ya, yb), or
+    (+inf, -inf) where dH/dy > 0 everywhere (dt below the contact's unique-root limit).
+
+    dH/dy = 0  <=>  phi(y) = ln y - c y**2 - ln(10) y + ln(2 c b / (ln(10) a)) = 0 (y > 0); phi is
+    concave with its maximum at y* = (sqrt(ln(10)**2 + 8c) - ln(10)) / (4c): no fold if
+    phi(y*) <= 0, else one zero on each side, found by bisection to 1e-14 decades.
+    """
+    import numpy as np
+
+    a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
+    ya = np.full(a.shape, np.inf)
+    yb = np.full(a.shape, -np.inf)
+    if c <= 0.0 or a.size == 0:
+        return ya, yb
+    const = np.log(2.0 * c * b / (LN10 * a))
+    ystar = (math.sqrt(LN10**2 + 8.0 * c) - LN10) / (4.0 * c)
+
+    def phi(y):
+        return np.log(y) - c * y * y - LN10 * y + const
+
+    has = phi(np.full(a.shape, ystar)) > 0.0
+    if not has.any():
+        return ya, yb
+    big = np.full(a.shape, ystar + 1.0)
+    while np.any(has & (phi(big) >= 0.0)):
+        big = np.where(phi(big) >= 0.0, 2.0 * big, big)
+    for lo0, hi0, out, rising in ((np.full(a.shape, 1e-300), np.full(a.shape, ystar), ya, True),
+                                  (np.full(a.shape, ystar), big, yb, False)):
+        lo, hi = lo0.copy(), hi0.copy()
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            up = phi(mid) > 0.0
+            lo, hi = np.where(up == rising, lo, mid), np.where(up == rising, mid, hi)
+            if np.all(hi - lo < 1e-14):
+                break
+        out[has] = (0.5 * (lo + hi))[has]
+    return ya, yb
 
 
 def compile_for(jit: Callable[[str, bool], Callable[[Callable], Callable]]) -> types.SimpleNamespace:

@@ -26,6 +26,7 @@ ALLOWED: dict[str, str] = {
     "N": "an integer >= 3 (blocks per chain; blocks along the sliding direction x, Lx, in 2-D)",
     "Ly": "an integer >= 1 (blocks across the sliding direction, y; 1 for the chain)",
     "geometry": "one of 'chain', 'chain2d', 'slab', 'halfspace'",
+    "integrator": "one of 'fixed' (dt below the unique-root limit), 'fold' (fold-aware contacts, issue 12)",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
     "c": "a number >= 0",
     "v0": "a number > 0 (m/s)",
@@ -58,7 +59,7 @@ LEGACY_KEYS: dict[str, str] = {
 
 # Keys added after 0.2 with a value that means "as before" (the chain): left out of the TOML text and
 # of sweep member ids while at it, so stored runs and stores stay valid.
-OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1}
+OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed"}
 _NOT_OFF = object()
 
 # The explicit 2-D steps keep dt*omega_max below this fraction of symplectic Euler's limit 2.
@@ -116,6 +117,7 @@ class Config(BaseModel):
     dead_weight: float | None = Field(None, gt=0)
     geometry: Literal["chain", "chain2d", "slab", "halfspace"] = "chain"
     Ly: int = Field(1, ge=1)
+    integrator: Literal["fixed", "fold"] = "fixed"
 
     dt: float = Field(2e-8, gt=0)
     t_total: float | None = Field(None, gt=0)
@@ -165,6 +167,9 @@ class Config(BaseModel):
             if not self.t_ramp < end:
                 raise ValueError(_message("t_ramp", self.t_ramp, f"shorter than {name} = {end:g} (the velocity is "
                                           "measured after the ramp)"))
+        if self.integrator == "fold":
+            self._check_fold_step()
+            return self
         dt_max = self.dt_unique_root_limit
         if self.dt >= dt_max:
             raise ValueError(
@@ -173,7 +178,8 @@ class Config(BaseModel):
                     self.dt,
                     f"dt < {dt_max:.3g} s: above it the per-contact implicit equation "
                     "m*u + dt*f(u) = r has several roots on the weakening branch of the slowest "
-                    "contact (v* = v0*10**-delta) and the dynamics are not those of the model",
+                    "contact (v* = v0*10**-delta) and the dynamics are not those of the model; "
+                    "integrator = 'fold' keeps each contact on its branch and allows larger dt",
                 )
             )
         return self
@@ -194,6 +200,24 @@ class Config(BaseModel):
             raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / w:.3g} s for geometry = "
                                       f"'{self.geometry}': the explicit step needs dt*omega_max < "
                                       f"{2.0 * STABLE_FRACTION:g}, omega_max = {w:.4g} 1/s"))
+
+    def _check_fold_step(self) -> None:
+        """integrator = 'fold' (issue 12): the contact equation may have several roots (the solver
+        picks the branch), so dt is bounded by the explicit part alone: the springs,
+        dt*omega_max < 1.8, and the explicit pair damping, dt*6*eta < 1.8."""
+        if self.geometry == "chain":  # (the 2-D geometries checked omega_max already)
+            w = self.omega_max
+            if not self.dt * w < 2.0 * STABLE_FRACTION:
+                raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / w:.3g} s with integrator = "
+                                          f"'fold': the explicit springs need dt*omega_max < {2.0 * STABLE_FRACTION:g}, "
+                                          f"omega_max = {w:.4g} 1/s"))
+        rate = 6.0 * self.eta if self.geometry in ("chain", "chain2d") else 0.0
+        if self.geometry == "chain2d":
+            rate = 10.0 * self.eta
+        if rate > 0 and not self.dt * rate < 2.0 * STABLE_FRACTION:
+            raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / rate:.3g} s with integrator = "
+                                      "'fold': the explicit pair damping needs dt*(2 z eta) < "
+                                      f"{2.0 * STABLE_FRACTION:g} (z neighbours and the other layer)"))
 
     # --- derived quantities (MODEL.md tables) -------------------------------------------
     @property

@@ -65,6 +65,11 @@ class Batch:
             uc = np.abs(st.u[s.contact_sites])
             with np.errstate(divide="ignore"):
                 ysolve[r, S.Y_LOG, :c] = np.where(uc > 0, np.log10(uc / s.vstar), 0.0)
+            ysolve[r, S.Y_FA], ysolve[r, S.Y_FB] = np.inf, -np.inf  # no folds (integrator 'fixed')
+            if s.config.integrator == "fold":
+                cf = s.config
+                ysolve[r, S.Y_FA, :c], ysolve[r, S.Y_FB, :c] = S.fold_points(
+                    cf.m * (1.0 + cf.dt * cf.eta_c) * s.vstar, cf.dt * cf.epsilon * cf.f0, cf.c)
         return cls(
             x=np.stack([s.x for s in states]).astype(float),
             u=np.stack([s.u for s in states]).astype(float),
@@ -120,6 +125,7 @@ def kernel_params(system: System) -> np.ndarray:
     p[S.P_ETAC] = cfg.eta_c
     p[S.P_SLOW] = SLOW_FRACTION * cfg.v_d
     p[S.P_LY] = cfg.Ly
+    p[S.P_FOLD] = 1.0 if cfg.integrator == "fold" else 0.0
     if cfg.geometry == "chain2d":
         p[S.P_LAT] = 1.0
         p[S.P_KY] = cfg.G * cfg.a

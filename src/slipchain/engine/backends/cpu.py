@@ -16,7 +16,7 @@ import numba as nb
 import numpy as np
 
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, N_ACC, N_CACC, N_OUT,
-                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_KLY, P_KY, P_LAT, P_LY, TAYLOR_MAX, Y_LOG, Y_P, Y_Q,
+                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_FOLD, P_KLY, P_KY, P_LAT, P_LY, TAYLOR_MAX, Y_FA, Y_FB, Y_LOG, Y_P, Y_Q,
                       compile_for)
 
 _scheme = compile_for(lambda name, inline: nb.njit(cache=True, inline="always" if inline else "never"))
@@ -25,6 +25,8 @@ scaled_exp = _scheme.scaled_exp
 solve_contact_bracketed = _scheme.solve_contact_bracketed
 taylor_newton_step = _scheme.taylor_newton_step
 solve_contact = _scheme.solve_contact
+solve_contact_fold = _scheme.solve_contact_fold
+solve_on_bracket = _scheme.solve_on_bracket
 block_update = _scheme.block_update
 block_update_2d = _scheme.block_update_2d
 row_parameters = _scheme.row_parameters
@@ -98,9 +100,10 @@ def _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
 
 
 @nb.njit(cache=True)
-def _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt):
+def _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt, fold):
     """The implicit contact solve of one step (scheme, step 3) for one row: every contact block's
-    new velocity written into ``un``, the force applied into ``fk``."""
+    new velocity written into ``un``, the force applied into ``fk``. ``fold``: integrator 'fold'
+    (the contacts the vectorised pass leaves go to :func:`~slipchain.engine.scheme.solve_contact_fold`)."""
     for k in range(nc):
         rk[k] = m * un[st[k]]
         ra[k] = abs(rk[k])
@@ -111,6 +114,9 @@ def _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt):
     for k in range(nc):
         if ok[k]:
             uk[k] = math.copysign(uk[k], rk[k])
+        elif fold:
+            uk[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact_fold(
+                rk[k], m_eff, bc, c, vs[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k], ys[Y_FA, k], ys[Y_FB, k])
         else:
             uk[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k] = solve_contact(
                 rk[k], m_eff, bc, c, vs[k], ys[Y_LOG, k], ys[Y_P, k], ys[Y_Q, k])
@@ -180,6 +186,7 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
             continue
         K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = row_parameters(params[row])
         lattice = params[row, P_LAT] > 0.0
+        fold = params[row, P_FOLD] > 0.0
         ly = int(params[row, P_LY])
         KY = params[row, P_KY]
         KLY = params[row, P_KLY]
@@ -207,7 +214,7 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
                 else:
                     fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst,
                                             dtm, dtmL)
-                _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt)
+                _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt, fold)
                 w_contact -= _contact_sums(nc, fk, uk, ca, slow) * dt
                 w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
                 w_drive += fsum * vd * dt

@@ -253,6 +253,8 @@ class CUDABackend:
         return THREADS_MAX if rows <= _sm_count() else 128
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
+        if np.any(batch.params[:, S.P_FOLD] > 0):
+            raise ValueError("integrator = 'fold' runs on the CPU backend only in this version (backend='cpu')")
         if batch.geometry != "chain":
             if batch.kernel is None:
                 raise ValueError(f"geometry = '{batch.geometry}' runs on the CPU backend only in this version "

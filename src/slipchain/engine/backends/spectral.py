@@ -29,7 +29,7 @@ import math
 import numba as nb
 import numpy as np
 
-from ..scheme import FASTMATH, A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN, O_XUMEAN, P_C
+from ..scheme import FASTMATH, A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN, O_XUMEAN, P_C, P_FOLD
 from .base import Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _refresh_solver, row_parameters
 
@@ -55,7 +55,8 @@ def _step(F, x, u, step, params, k0, sites, vstar, n_contacts, ysolve, cacc, acc
             damp[i] = d
             sx += xr[i]
         nc = n_contacts[row]
-        _contacts(nc, un, sites[row], rk, ra, uk, fk, ok, vstar[row], ysolve[row], m, m_eff, bc, c, 1.0 / dt)
+        _contacts(nc, un, sites[row], rk, ra, uk, fk, ok, vstar[row], ysolve[row], m, m_eff, bc, c, 1.0 / dt,
+                  params[row, P_FOLD] > 0.0)
         w_contact = _contact_sums(nc, fk, uk, cacc[row], slow) * dt
         wd = 0.0
         for i in range(n):
