@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from ..results.schema import Status
 from .statistics import base_config, drive_velocities, ratio, seed_average
 
 GEOMETRY_ORDER = ("chain", "chain2d", "slab", "halfspace")
@@ -69,12 +70,23 @@ def drops(table: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def not_completed(ds: xr.Dataset) -> pd.DataFrame:
+    """The members that ran but did not complete: their coordinates, status and message."""
+    frame = ds[["status", "message"]].to_dataframe().reset_index()
+    grid = (Status.COMPLETED, Status.ABSENT, Status.MISSING)
+    return frame[~frame["status"].isin([str(s) for s in grid])].reset_index(drop=True)
+
+
 def fig6_3d_data(ds: xr.Dataset) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
-    """The table, the drops, and attrs: v_d1, v_d2 and the main size of each geometry."""
+    """The table, the drops, and attrs: v_d1, v_d2, the main size of each geometry, the dashed line
+    f(v_d2, v0)/(epsilon f0) of Fig. 6 and the members that did not complete."""
+    from .fig6 import dashed_line
+
     cfg = base_config(ds)
     table = geometry_table(ds)
     v_d1, v_d2 = drive_velocities(cfg, np.unique(table["v_d"].values))
-    return table, drops(table), {"v_d1": v_d1, "v_d2": v_d2, "main": main_sizes(table, v_d1), "a": cfg.a}
+    return table, drops(table), {"v_d1": v_d1, "v_d2": v_d2, "main": main_sizes(table, v_d1), "a": cfg.a,
+                                 "dashed_line": dashed_line(cfg, v_d2), "not_completed": not_completed(ds)}
 
 
 def _fmt(mu: float, err: float) -> str:
@@ -117,6 +129,15 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
         lines.append(f"| {r['geometry']} | {int(r['N'])} x {int(r['Ly'])} | {int(r['N_L'])} | {hl} | {r['v_d']:g} | "
                      f"{r['theta_min']:g} -> {r['theta_max']:g} | {_fmt(r['ratio'], r['ratio_err'])} |")
     lines.append("")
+    bad = attrs.get("not_completed")
+    if bad is not None and len(bad):
+        lines += ["## Members that did not complete (left out of the means)", "",
+                  "| " + " | ".join(c for c in bad.columns if c != "message") + " | reason |",
+                  "|" + "---|" * len(bad.columns)]
+        for _, r in bad.iterrows():
+            cells = [f"{v:g}" if isinstance(v, float) else str(v) for k, v in r.items() if k != "message"]
+            lines.append("| " + " | ".join(cells) + f" | {str(r['message']).replace('|', '/')} |")
+        lines.append("")
     return "\n".join(lines)
 
 

@@ -44,7 +44,8 @@ def run(
         fail(str(e))
     if dry_run:
         length = f"t_total = {cfg.t_total:g} s" if cfg.t_total is not None else f"automatic length, at most {cfg.t_max:g} s"
-        out.print(f"valid config: N = {cfg.N}, {cfg.n_contacts} contacts, {length}, dt = {cfg.dt:g} s; about "
+        shape = f"N = {cfg.N}" if cfg.geometry == "chain" else f"{cfg.geometry} N x Ly = {cfg.N} x {cfg.Ly}"
+        out.print(f"valid config: {shape}, {cfg.n_contacts} contacts, {length}, dt = {cfg.dt:g} s; about "
                   f"{need / 2**20:,.0f} MiB of memory. Dry run: nothing run or written.", markup=False, highlight=False,
                   soft_wrap=True)
         sys.stdout.write(cfg.to_toml())

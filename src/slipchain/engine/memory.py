@@ -51,13 +51,20 @@ def simulated_length(cfg: Config) -> float:
     return cfg.t_total if cfg.t_total is not None else cfg.t_max
 
 
+# The slab and half-space add the kernel a**2 k(q) (8 bytes per block on the half grid, 4 per block)
+# and the FFT's temporaries of one step: the spectrum (16 bytes per half-grid point) twice and the
+# force field (8), rounded up.
+BYTES_PER_BLOCK_FFT = 64
+
+
 def estimate_bytes(cfg: Config) -> int:
     """Bytes that one realisation of ``cfg`` holds at its peak, beyond the interpreter (see the module docstring)."""
     t = simulated_length(cfg)
     chunks = int(t / CHUNK_TIME) + 1
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
-    return int(cfg.n_blocks * BYTES_PER_BLOCK + n_c * (BYTES_PER_CONTACT + S.N_CACC * 8 * chunks) + samples * BYTES_PER_SAMPLE)
+    per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if cfg.geometry in ("slab", "halfspace") else 0)
+    return int(cfg.n_blocks * per_block + n_c * (BYTES_PER_CONTACT + S.N_CACC * 8 * chunks) + samples * BYTES_PER_SAMPLE)
 
 
 def available_bytes() -> int | None:

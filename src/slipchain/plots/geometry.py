@@ -47,6 +47,8 @@ def plot_fig6_3d(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, out: str 
             for (n, ly), s in small.groupby(["N", "Ly"]):
                 ax.errorbar(s["theta"], s["mu"], s["err"], color=color, marker=marker, mfc="white", ls=":", ms=5,
                             capsize=2, label=f"{geo}, {int(n)} x {int(ly)}")
+        if name == "v_d2" and np.isfinite(attrs.get("dashed_line", np.nan)):
+            ax.axhline(attrs["dashed_line"], color="0.4", ls="--", lw=1, label=r"$f(v_{d2}, v_0)/(\varepsilon f_0)$")
         ax.set_xlabel(r"$\theta$ (load)")
         ax.set_ylabel(r"$\mu^*$")
         ax.set_title(f"({'ab'[name == 'v_d2']}) {name} = {v:g} m/s")
@@ -60,6 +62,11 @@ def plot_fig6_3d(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, out: str 
         ax.errorbar(slab_main["H_over_L"], slab_main["ratio"], slab_main["ratio_err"], color=STYLE["slab"][0],
                     marker="D", capsize=2, label=f"slab, {int(slab_main['N'].iloc[0])} x {int(slab_main['Ly'].iloc[0])}")
     xmax = 4.0
+    bad = attrs.get("not_completed")
+    if bad is not None and len(bad) and "N_L" in bad:
+        for (nl, n), _ in bad[(bad["geometry"] == "slab") & np.isclose(bad["v_d"], attrs["v_d1"])].groupby(["N_L", "N"]):
+            ax.annotate(f"H/(La) = {nl / n:.3g}:\nno steady state\nat the largest theta", (nl / n, 0.95),
+                        fontsize=7, ha="center", color=STYLE["slab"][0])
     half = d1[d1["geometry"] == "halfspace"]
     if len(half):
         ax.errorbar([xmax], half["ratio"].iloc[:1], half["ratio_err"].iloc[:1], color=STYLE["halfspace"][0],
