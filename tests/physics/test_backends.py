@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from slipchain import build_system, initial_state, make_config, simulate
+from slipchain.engine import scheme as S
 from slipchain.engine.backends import Batch, CPUBackend, get_backend
 from slipchain.engine.simulate import simulate_batch
 
@@ -37,8 +38,9 @@ def test_cuda_kernel_agrees_with_the_cpu_kernel_step_by_step():
     ok = [0, 1, 2]
     # Same scheme and the same solver (warm-started Newton to 1e-5 decades): only round-off differs.
     for a, b in ((oc.out[ok], og.out[ok]), (bc.x[ok], bg.x[ok]), (bc.U[ok], bg.U[ok]), (oc.acc[ok], og.acc[ok]),
-                 (oc.cacc[ok], og.cacc[ok]), (bc.ysolve[ok], bg.ysolve[ok])):
+                 (oc.cacc[ok], og.cacc[ok]), (bc.ysolve[ok, :S.N_YS_STATE], bg.ysolve[ok, :S.N_YS_STATE])):
         assert _rel(a, b) < 1e-12
+    assert np.array_equal(bc.ysolve[:, S.N_YS_STATE:], bg.ysolve[:, S.N_YS_STATE:])  # the folds: inputs, untouched
     assert bc.status[:3].tolist() == bg.status[:3].tolist() == [-1, -1, -1]
     assert bc.status[3] >= 0 and bg.status[3] >= 0  # the diverging row is caught on both
     assert bc.step[:3].tolist() == bg.step[:3].tolist() == [80, 80, 80]

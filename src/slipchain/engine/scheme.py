@@ -64,6 +64,7 @@ N_ACC = 3
 C_F, C_U, C_U2, C_SLOW = range(4)  # per-contact sums over steps: force, u, u^2, steps with |u| < slow
 N_CACC = 4
 Y_LOG, Y_P, Y_Q = range(3)  # per-contact solver state: y = log10(|u|/v*), p = 10**y, q = exp(-c y^2)
+N_YS_STATE = 3  # the rows above are the solver's state; the rows below are inputs
 Y_FA, Y_FB = 3, 4  # integrator 'fold' (issue 12): the contact equation's folds (local max, min of H in y)
 N_YS = 5
 
