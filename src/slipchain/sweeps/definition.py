@@ -230,20 +230,18 @@ def load_sweep_definition(path: str | Path, *, legacy: bool = False) -> SweepDef
 
 class Preset(StrEnum):
     """The shipped Fig. 6 sweeps: ``quick`` (60 runs, minutes), ``paper`` (368 runs, Fig. 6 in full) and
-    ``fold`` and ``fold-eps`` (the Fig. 6 corners with integrator = 'fold' at three dt, epsilon = 1e-2
-    and 0.1: issue 12's convergence tables)."""
+    ``fold`` (the Fig. 6 corners with integrator = 'fold' at three dt: issue 12's convergence table)."""
 
     QUICK = "quick"
     PAPER = "paper"
     FOLD = "fold"
-    FOLD_EPS = "fold-eps"
 
 
 PRESETS = tuple(p.value for p in Preset)
 
 
 def preset_path(name: str | Preset) -> Path:
-    """Path of a shipped Fig. 6 preset (``quick``, ``paper``, ``fold``, ``fold-eps``)."""
+    """Path of a shipped Fig. 6 preset (``quick``, ``paper`` or ``fold``)."""
     if name not in PRESETS:
         raise SweepError(f"preset {name!r} is unknown; expected one of {', '.join(PRESETS)}")
     return Path(str(resources.files("slipchain") / "presets" / f"fig6-{Preset(name).value}.toml"))
