@@ -93,8 +93,10 @@ def _fmt(mu: float, err: float) -> str:
     return f"{mu:.3f} ± {err:.3f}"
 
 
-def _is_main(row, main) -> bool:
-    return tuple(int(row[k]) for k in SIZE_KEYS) == tuple(int(v) for v in main.get(row["geometry"], ()))
+def main_mask(frame: pd.DataFrame, main: dict[str, tuple[int, int, int]]) -> np.ndarray:
+    """Rows of a table or drops frame at the main size (N, Ly, N_L) of their geometry (:func:`main_sizes`)."""
+    return np.array([tuple(int(v) for v in r[1:]) == tuple(int(v) for v in main.get(r[0], ()))
+                     for r in frame[["geometry", *SIZE_KEYS]].itertuples(index=False)], dtype=bool)
 
 
 def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, command: str = "",
@@ -107,7 +109,7 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
         lines += [f"Command: `{command}`" + (f" ({wall})" if wall else ""), ""]
     lines += ["Seed means ± SE (seeds and time, `analysis.statistics.seed_average`); mu_star = <f_d>/(epsilon f0 "
               "theta), theta = N_c/(N Ly).", "", "## mu_star(theta) at the main size of each geometry", ""]
-    mains = table[[_is_main(r, main) for _, r in table.iterrows()]]
+    mains = table[main_mask(table, main)]
     for v in sorted(mains["v_d"].unique(), reverse=True):
         name = "v_d1" if np.isclose(v, v_d1) else "v_d2" if np.isclose(v, v_d2) else f"v_d = {v:g}"
         cur = mains[np.isclose(mains["v_d"], v)]
@@ -141,4 +143,4 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     return "\n".join(lines)
 
 
-__all__ = ["GEOMETRY_ORDER", "drops", "fig6_3d_data", "geometry_table", "main_sizes", "report_markdown"]
+__all__ = ["GEOMETRY_ORDER", "drops", "fig6_3d_data", "geometry_table", "main_mask", "main_sizes", "report_markdown"]

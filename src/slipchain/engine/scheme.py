@@ -97,12 +97,19 @@ def solve_contact_bracketed(ra, a, b, c, y):
     y_hi = log10(ra/a); y_lo = min(y_hi - log10 2, -sqrt(ln(2b/ra)/c)); every y below y_lo has
     H(y) <= 0 too, every y above y_hi H(y) > 0.
     """
+    y_lo, y_hi = contact_bracket(ra, a, b, c)
+    return solve_on_bracket(ra, a, b, c, y, y_lo, y_hi)
+
+
+def contact_bracket(ra, a, b, c):
+    """(y_lo, y_hi) with H(y) <= 0 for every y <= y_lo and H(y) > 0 for every y >= y_hi, H(y) =
+    a*10**y + b*exp(-c*y**2) - ra (:func:`solve_contact_bracketed`)."""
     y_hi = math.log10(ra / a)
     y_lo = y_hi - LOG10_2
     lg = math.log(2.0 * b / ra)
     if lg > 0.0:
         y_lo = min(y_lo, -math.sqrt(lg / c))
-    return solve_on_bracket(ra, a, b, c, y, y_lo, y_hi)
+    return y_lo, y_hi
 
 
 def solve_on_bracket(ra, a, b, c, y, y_lo, y_hi):
@@ -149,12 +156,8 @@ def solve_contact_fold(r, m_eff, b, c, vstar, y, p, q, ya, yb):
         lower = a * math.exp(LN10 * ya) + b * math.exp(-c * ya * ya) - ra >= 0.0
     else:  # on the upper branch: keep it while its root exists (H(yb) <= 0)
         lower = a * math.exp(LN10 * yb) + b * math.exp(-c * yb * yb) - ra > 0.0
-    y_hi = math.log10(ra / a)
+    y_lo, y_hi = contact_bracket(ra, a, b, c)
     if lower:
-        y_lo = y_hi - LOG10_2
-        lg = math.log(2.0 * b / ra)
-        if lg > 0.0:
-            y_lo = min(y_lo, -math.sqrt(lg / c))
         y = solve_on_bracket(ra, a, b, c, y, min(y_lo, ya), ya)
     else:
         y = solve_on_bracket(ra, a, b, c, y, yb, max(y_hi, yb))
@@ -262,7 +265,8 @@ def row_parameters(p):
 
 # The scheme's functions in dependency order; those marked True are small enough to inline.
 FUNCTIONS: tuple[tuple[str, bool], ...] = (
-    ("exp_taylor", True), ("scaled_exp", True), ("solve_on_bracket", False), ("solve_contact_bracketed", False),
+    ("exp_taylor", True), ("scaled_exp", True), ("solve_on_bracket", False), ("contact_bracket", True),
+    ("solve_contact_bracketed", False),
     ("taylor_newton_step", True), ("solve_contact", False), ("solve_contact_fold", False), ("block_update", True), ("block_update_2d", True), ("row_parameters", True),
 )
 

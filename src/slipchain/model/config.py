@@ -186,7 +186,7 @@ class Config(BaseModel):
 
     def _check_geometry(self) -> None:
         """The 2-D geometries (issue 13): Ly only off the chain, no dead weight on the continuum
-        yet, and the explicit step stable: dt*omega_max < STABLE_FRACTION*2 (symplectic Euler)."""
+        yet, and the explicit step stable (:meth:`_check_explicit_step`)."""
         if self.geometry == "chain":
             if self.Ly != 1:
                 raise ValueError(_message("Ly", self.Ly, "1 with geometry = 'chain' (a 2-D interface is geometry = "
@@ -195,29 +195,27 @@ class Config(BaseModel):
         if self.geometry in ("slab", "halfspace") and self.dead_weight is not None:
             raise ValueError(_message("dead_weight", self.dead_weight, f"absent with geometry = '{self.geometry}' "
                                       "(the dead-weight drive is built for the chains only, so far)"))
-        w = self.omega_max
-        if not self.dt * w < 2.0 * STABLE_FRACTION:
-            raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / w:.3g} s for geometry = "
-                                      f"'{self.geometry}': the explicit step needs dt*omega_max < "
-                                      f"{2.0 * STABLE_FRACTION:g}, omega_max = {w:.4g} 1/s"))
+        self._check_explicit_step(f"for geometry = '{self.geometry}'")
 
     def _check_fold_step(self) -> None:
         """integrator = 'fold' (issue 12): the contact equation may have several roots (the solver
         picks the branch), so dt is bounded by the explicit part alone: the springs,
-        dt*omega_max < 1.8, and the explicit pair damping, dt*6*eta < 1.8."""
+        dt*omega_max < 1.8, and the explicit pair damping, dt*2z*eta < 1.8 (z neighbours and the
+        other layer: 6 for the chain, 10 for chain2d)."""
         if self.geometry == "chain":  # (the 2-D geometries checked omega_max already)
-            w = self.omega_max
-            if not self.dt * w < 2.0 * STABLE_FRACTION:
-                raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / w:.3g} s with integrator = "
-                                          f"'fold': the explicit springs need dt*omega_max < {2.0 * STABLE_FRACTION:g}, "
-                                          f"omega_max = {w:.4g} 1/s"))
-        rate = 6.0 * self.eta if self.geometry in ("chain", "chain2d") else 0.0
-        if self.geometry == "chain2d":
-            rate = 10.0 * self.eta
+            self._check_explicit_step("with integrator = 'fold'")
+        rate = {"chain": 6.0, "chain2d": 10.0}.get(self.geometry, 0.0) * self.eta
         if rate > 0 and not self.dt * rate < 2.0 * STABLE_FRACTION:
             raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / rate:.3g} s with integrator = "
                                       "'fold': the explicit pair damping needs dt*(2 z eta) < "
                                       f"{2.0 * STABLE_FRACTION:g} (z neighbours and the other layer)"))
+
+    def _check_explicit_step(self, context: str) -> None:
+        """dt*omega_max < STABLE_FRACTION*2 (symplectic Euler's limit is 2); ``context`` says why it applies."""
+        w = self.omega_max
+        if not self.dt * w < 2.0 * STABLE_FRACTION:
+            raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / w:.3g} s {context}: the explicit "
+                                      f"step needs dt*omega_max < {2.0 * STABLE_FRACTION:g}, omega_max = {w:.4g} 1/s"))
 
     # --- derived quantities (MODEL.md tables) -------------------------------------------
     @property
@@ -251,20 +249,25 @@ class Config(BaseModel):
         """Upper bound of the undamped angular frequencies [1/s] (Gershgorin for the chains; for the
         slab and half-space a**2 max k / m, k at the largest |q| of the grid, where k is largest)."""
         if self.geometry in ("chain", "chain2d"):
-            ky = self.G * self.a if self.geometry == "chain2d" else 0.0
-            kyl = self.N_L * ky
-            il = 2.0 * (2.0 * self.K + 2.0 * ky + self.K_T) / self.m
-            ul = 2.0 * (2.0 * self.K_L + 2.0 * kyl + self.K_T) / (self.N_L * self.m) + self.K_d / (self.N_L * self.m)
+            il = 2.0 * (2.0 * self.K + 2.0 * self.K_Y + self.K_T) / self.m
+            ul = 2.0 * (2.0 * self.K_L + 2.0 * self.K_LY + self.K_T) / (self.N_L * self.m) + self.K_d / (self.N_L * self.m)
             return math.sqrt(max(il, ul))
-        from .elastic import halfspace_kernel, slab_kernel
+        from .elastic import interface_kernel
 
         qx = math.pi / self.a if self.N > 1 else 0.0
         qy = math.pi / self.a if self.Ly > 1 else 0.0
-        if self.geometry == "slab":
-            k = float(slab_kernel(qx, qy, self.H, self.G, self.nu, self.kappa_d))
-        else:
-            k = float(halfspace_kernel(qx, qy, self.G, self.nu, self.kappa_d))
+        k = float(interface_kernel(self.geometry, qx, qy, self.H, self.G, self.nu, self.kappa_d))
         return math.sqrt(self.a**2 * k / self.m)
+
+    @property
+    def K_Y(self) -> float:
+        """IL spring along y, K_Y = G*a [N/m] (chain2d; 0 for the other geometries)."""
+        return self.G * self.a if self.geometry == "chain2d" else 0.0
+
+    @property
+    def K_LY(self) -> float:
+        """UL spring along y, K_LY = N_L*G*a [N/m] (chain2d; 0 for the other geometries)."""
+        return self.N_L * self.K_Y
 
     @property
     def m(self) -> float:

@@ -137,6 +137,17 @@ def halfspace_kernel(qx: ArrayLike, qy: ArrayLike, G: float, nu: float, kappa_d:
     return _mix(qx, qy, kp, ks, kappa_d)
 
 
+def interface_kernel(geometry: str, qx: ArrayLike, qy: ArrayLike, H: float, G: float, nu: float,
+                     kappa_d: float) -> np.ndarray:
+    """k(qx, qy) of the body above the interface for a config's ``geometry``: :func:`slab_kernel`
+    (top on the drive springs) for 'slab', :func:`halfspace_kernel` for 'halfspace'."""
+    if geometry == "slab":
+        return slab_kernel(qx, qy, H, G, nu, kappa_d)
+    if geometry == "halfspace":
+        return halfspace_kernel(qx, qy, G, nu, kappa_d)
+    raise ValueError(f"geometry {geometry!r} has no elastic kernel (only 'slab' and 'halfspace')")
+
+
 def wavenumbers(Lx: int, Ly: int, a: float) -> tuple[np.ndarray, np.ndarray]:
     """(qx, qy) on the grid of ``rfft2`` of an (Lx, Ly) periodic field of spacing a (1/m), shapes
     (Lx, Ly//2 + 1): the full axis first, the half axis last."""
@@ -157,4 +168,4 @@ def elastic_force(u: np.ndarray, X: float | np.ndarray, k_half: np.ndarray, a: f
     return -(a * a) * fft.irfft2(k_half * fft.rfft2(d), s=d.shape)
 
 
-__all__ = ["QH_HALFSPACE", "elastic_force", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]
+__all__ = ["QH_HALFSPACE", "elastic_force", "interface_kernel", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]

@@ -105,22 +105,18 @@ def mu_star_norm(system: System) -> float:
 def uniform_stiffness(cfg: Config) -> float:
     """k(0) [Pa/m]: the stiffness per area of the uniform mode of the slab, (H/G + 1/kappa_d)**-1, or of the
     half-space, kappa_d (the drive springs alone)."""
-    return cfg.kappa_d if cfg.geometry == "halfspace" else 1.0 / (cfg.H / cfg.G + 1.0 / cfg.kappa_d)
+    from .elastic import interface_kernel
+
+    return float(interface_kernel(cfg.geometry, 0.0, 0.0, cfg.H, cfg.G, cfg.nu, cfg.kappa_d))
 
 
 def elastic_kernel(cfg: Config) -> np.ndarray:
     """a**2 k(q) [N/m] on the rfft2 grid of the (N, Ly) interface (slab, halfspace; :mod:`.elastic`):
     the block force is -IFFT[a**2 k FFT(x - v_d t)]."""
-    from .elastic import halfspace_kernel, slab_kernel, wavenumbers
+    from .elastic import interface_kernel, wavenumbers
 
-    qx, qy = wavenumbers(cfg.N, cfg.Ly, cfg.a)
-    if cfg.geometry == "slab":
-        k = slab_kernel(qx, qy, cfg.H, cfg.G, cfg.nu, cfg.kappa_d)
-    elif cfg.geometry == "halfspace":
-        k = halfspace_kernel(qx, qy, cfg.G, cfg.nu, cfg.kappa_d)
-    else:
-        raise ValueError(f"geometry {cfg.geometry!r} has no elastic kernel (only 'slab' and 'halfspace')")
-    return cfg.a**2 * k
+    return cfg.a**2 * interface_kernel(cfg.geometry, *wavenumbers(cfg.N, cfg.Ly, cfg.a), cfg.H, cfg.G, cfg.nu,
+                                       cfg.kappa_d)
 
 
 @dataclass

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..analysis.geometry import main_mask
 from .common import pyplot, save_figure
 
 STYLE = {"chain": ("black", "s", "chain (paper), N = {N}"), "chain2d": ("tab:blue", "o", "2-D chains, {N} x {Ly}"),
@@ -38,7 +39,7 @@ def plot_fig6_3d(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, out: str 
             color, marker, _ = STYLE[geo]
             rows = at_v[at_v["geometry"] == geo]
             size = main[geo]
-            is_main = (rows["N"] == size[0]) & (rows["Ly"] == size[1]) & (rows["N_L"] == size[2])
+            is_main = main_mask(rows, main)
             m = rows[is_main]
             if len(m):
                 ax.errorbar(m["theta"], m["mu"], m["err"], color=color, marker=marker, ms=5, capsize=2,
@@ -74,7 +75,7 @@ def plot_fig6_3d(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, out: str 
     for geo in ("chain", "chain2d"):
         if geo not in main:
             continue
-        r = d1[(d1["geometry"] == geo) & (d1["N"] == main[geo][0]) & (d1["Ly"] == main[geo][1])]
+        r = d1[(d1["geometry"] == geo).to_numpy() & main_mask(d1, main)]
         if len(r):
             y, e = float(r["ratio"].iloc[0]), float(r["ratio_err"].iloc[0])
             ax.axhspan(y - e, y + e, color=STYLE[geo][0], alpha=0.2)

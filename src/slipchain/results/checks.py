@@ -36,9 +36,8 @@ def stored_energy(system: System, state: State) -> float:
     if cfg.geometry == "chain2d":  # the (Lx, Ly) lattice, row-major (model.system)
         g = (cfg.N, cfg.Ly)
         xg, Xg = x.reshape(g), X.reshape(g)
-        ky = cfg.G * cfg.a
         elastic = sum(0.5 * k * np.sum((np.roll(f, -1, axis=ax) - f) ** 2)
-                      for k, f, ax in ((cfg.K, xg, 0), (cfg.K_L, Xg, 0), (ky, xg, 1), (cfg.N_L * ky, Xg, 1)))
+                      for k, f, ax in ((cfg.K, xg, 0), (cfg.K_L, Xg, 0), (cfg.K_Y, xg, 1), (cfg.K_LY, Xg, 1)))
         elastic += 0.5 * cfg.K_T * np.sum((X - x) ** 2)
         if cfg.dead_weight is None:
             elastic += 0.5 * cfg.K_d * np.sum((drive - X) ** 2)

@@ -57,6 +57,14 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
     return Path(path)
 
 
+def write_csv(table: Any, path: str | os.PathLike, **to_csv: Any) -> Path:
+    """Write a table (a pandas DataFrame) as CSV atomically, without its index unless ``index=True``
+    is given among the ``to_csv`` options; returns the path."""
+    with atomic_write(path) as tmp:
+        table.to_csv(tmp, **{"index": False, **to_csv})
+    return Path(path)
+
+
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     """Write ``ds`` to ``path`` (NetCDF4) atomically; returns the path."""
     with atomic_write(path) as tmp:

@@ -45,7 +45,7 @@ from ..analysis.statistics import ratios_to_first
 from ..engine.backends import BackendName
 from ..engine.simulate import run
 from ..model.config import Config, ConfigError, make_config
-from ..results.io import write_text_atomic
+from ..results.io import write_csv, write_text_atomic
 from ..results.velocity import VelocityStatus
 from ..sweeps.definition import member_id
 
@@ -369,7 +369,6 @@ def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, n_worker
     every realisation's bracket is refuted (nothing to report)."""
     import pandas as pd
 
-    from .tester import write_csv
 
     out = Path(out)
     configs = plan.configs()

@@ -54,17 +54,14 @@ def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "",
     effect per geometry, size and velocity) from a store sweeping geometry, theta and v_d."""
     from ..analysis.geometry import fig6_3d_data, report_markdown
     from ..plots.geometry import plot_fig6_3d
-    from ..results.io import atomic_write
+    from ..results.io import write_csv, write_text_atomic
 
     table, drop, attrs = fig6_3d_data(sweep_dataset(store, {"geometry", "theta", "v_d"}, "the Fig. 6-in-3-D figure"))
     paths = plot_fig6_3d(table, drop, attrs, out)
-    for name, frame in (("table.csv", table), ("drops.csv", drop)):
-        with atomic_write(Path(out) / name) as tmp:
-            frame.to_csv(tmp, index=False, float_format="%.6g")
-        paths.append(Path(out) / name)
-    with atomic_write(Path(out) / "report.md") as tmp:
-        tmp.write_text(report_markdown(table, drop, attrs, command=command, wall=wall))
-    return paths + [Path(out) / "report.md"]
+    paths += [write_csv(frame, Path(out) / name, float_format="%.6g")
+              for name, frame in (("table.csv", table), ("drops.csv", drop))]
+    return paths + [write_text_atomic(Path(out) / "report.md", report_markdown(table, drop, attrs, command=command,
+                                                                             wall=wall))]
 
 
 def slip_maps(run: str | os.PathLike, out: str | os.PathLike, duration: float, interval: float) -> list[Path]:
@@ -74,15 +71,14 @@ def slip_maps(run: str | os.PathLike, out: str | os.PathLike, duration: float, i
     from ..model.config import ConfigError, config_from_toml
     from ..model.system import build_system
     from ..plots.geometry import plot_slip_maps
-    from ..results.io import atomic_write
+    from ..results.io import read_dataset, write_csv
 
     try:
-        ds = xr.open_dataset(run)
+        ds = read_dataset(run)
     except (OSError, ValueError) as err:
         raise ConfigError(f"--run {str(run)!r} is not a run file: {err}") from None
-    with ds:
-        cfg = config_from_toml(ds.attrs["config"])
-        state = state_from_run(ds.load())
+    cfg = config_from_toml(ds.attrs["config"])
+    state = state_from_run(ds)
     if cfg.Ly < 2:
         raise ConfigError(f"--run {str(run)!r} has Ly = {cfg.Ly}; slip maps need a 2-D interface (Ly >= 2)")
     field = record_field(build_system(cfg), state, duration, interval, positions=True)
@@ -90,9 +86,7 @@ def slip_maps(run: str | os.PathLike, out: str | os.PathLike, duration: float, i
     if events.sizes.get("event", 0) == 0:
         raise ConfigError(f"no block slipped faster than 2 v_d in {duration:g} s: record longer (--duration)")
     paths = plot_slip_maps(field, events, out)
-    with atomic_write(Path(out) / "events.csv") as tmp:
-        events.to_dataframe().to_csv(tmp, float_format="%.6g")
-    return paths + [Path(out) / "events.csv"]
+    return paths + [write_csv(events.to_dataframe(), Path(out) / "events.csv", index=True, float_format="%.6g")]
 
 
 def velocity(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:

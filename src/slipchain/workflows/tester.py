@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..results.io import atomic_write, write_text_atomic
+from ..results.io import write_csv, write_text_atomic
 from ..tester.analysis import LoadTest, analyze_runs, load_tests, maxima, summary_markdown
 from ..tester.inputs import read_runs, read_traces
 from ..plots.tester import plot_mu_v
@@ -23,13 +23,6 @@ class Analysis:
     maxima: pd.DataFrame
     tests: list[LoadTest]
     files: dict[str, Path]
-
-
-def write_csv(df: pd.DataFrame, path: Path) -> Path:
-    """Write a table as CSV atomically; returns the path."""
-    with atomic_write(path) as tmp:
-        df.to_csv(tmp, index=False)
-    return path
 
 
 def analyze(runs_csv: str | os.PathLike, traces_csv: str | os.PathLike | None, out: str | os.PathLike) -> Analysis:

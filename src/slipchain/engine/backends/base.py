@@ -128,8 +128,8 @@ def kernel_params(system: System) -> np.ndarray:
     p[S.P_FOLD] = 1.0 if cfg.integrator == "fold" else 0.0
     if cfg.geometry == "chain2d":
         p[S.P_LAT] = 1.0
-        p[S.P_KY] = cfg.G * cfg.a
-        p[S.P_KLY] = cfg.N_L * cfg.G * cfg.a
+        p[S.P_KY] = cfg.K_Y
+        p[S.P_KLY] = cfg.K_LY
     elif cfg.geometry in ("slab", "halfspace"):  # no upper layer: the kernel couples; radiation damping
         p[S.P_KL] = p[S.P_KT] = 0.0
         p[S.P_META] = cfg.m * cfg.radiation_damping_rate

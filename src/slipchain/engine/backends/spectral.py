@@ -29,7 +29,7 @@ import math
 import numba as nb
 import numpy as np
 
-from ..scheme import FASTMATH, A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN, O_XUMEAN, P_C, P_FOLD
+from ..scheme import FASTMATH, A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN, P_C, P_FOLD
 from .base import Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _refresh_solver, row_parameters
 
@@ -72,9 +72,9 @@ def _step(F, x, u, step, params, k0, sites, vstar, n_contacts, ysolve, cacc, acc
 
 
 @nb.njit(cache=True)
-def _end_sample(x, ysolve, params, n_contacts, status, step, fd, out, s, sample_steps, acc, refresh):
-    """Record sample s (mean f_d, <x>; the upper layer's <X> is 0: none), flag non-finite rows,
-    and (``refresh``) recompute the contact solvers' exact 10**y, exp(-c y^2) for the next one."""
+def _end_sample(x, status, step, fd, out, s, sample_steps, acc):
+    """Record sample s (mean f_d and <x>; the upper layer's <X> stays 0: there is none) and flag
+    rows that went non-finite."""
     nb_rows, n = x.shape
     for row in range(nb_rows):
         if status[row] >= 0:
@@ -84,11 +84,8 @@ def _end_sample(x, ysolve, params, n_contacts, status, step, fd, out, s, sample_
             xs += x[row, i]
         out[row, s, O_FD] += fd[row] / sample_steps
         out[row, s, O_XMEAN] += xs / n
-        out[row, s, O_XUMEAN] += 0.0
         if not (math.isfinite(fd[row]) and math.isfinite(xs) and math.isfinite(acc[row, A_WCONTACT])):
             status[row] = step[row]
-        elif refresh:
-            _refresh_solver(n_contacts[row], ysolve[row], params[row, P_C])
         fd[row] = 0.0
 
 
@@ -111,17 +108,16 @@ def advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkO
     rk, ra, uk, fk = (np.empty(cmax) for _ in range(4))
     ok = np.empty(cmax, dtype=np.bool_)
     grid = batch.x.reshape(b, lx, ly)  # a view: the FFT reads the state in place
-    for row in np.flatnonzero(batch.status < 0):
-        _refresh_solver(batch.n_contacts[row], batch.ysolve[row], batch.params[row, P_C])
     for s in range(n_samples):
+        for row in np.flatnonzero(batch.status < 0):  # exact 10**y, exp(-c y^2) at every sample, as the chain's
+            _refresh_solver(batch.n_contacts[row], batch.ysolve[row], batch.params[row, P_C])
         for _ in range(sample_steps):
             spec = fft.rfft2(grid, axes=(1, 2))
             spec *= neg
             F = fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True)
             _step(F.reshape(b, n), batch.x, batch.u, batch.step, batch.params, k0, batch.sites, batch.vstar,
                   batch.n_contacts, batch.ysolve, cacc, acc, fd, batch.status, un, damp, rk, ra, uk, fk, ok)
-        _end_sample(batch.x, batch.ysolve, batch.params, batch.n_contacts, batch.status, batch.step, fd, out, s,
-                    sample_steps, acc, s + 1 < n_samples)
+        _end_sample(batch.x, batch.status, batch.step, fd, out, s, sample_steps, acc)
     return ChunkOutput(out, acc, cacc)
 
 
