@@ -101,7 +101,7 @@ def test_a_batch_gives_exactly_the_single_runs(backend):
         np.testing.assert_array_equal(ds["f_d"].values, alone["f_d"].values)
         np.testing.assert_array_equal(ds["x"].values, alone["x"].values)
         assert ds.attrs["mu_star"] == alone.attrs["mu_star"] and ds.attrs["t_total"] == alone.attrs["t_total"]
-    with pytest.raises(ValueError, match="a batch needs equal N, dt and output_interval"):
+    with pytest.raises(ValueError, match="a batch needs equal N, dt, output_interval"):
         simulate_batch([build_system(cfgs[0]), build_system(cfgs[0].with_updates(N=41))])
 
 

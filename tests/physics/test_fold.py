@@ -101,4 +101,4 @@ def test_fold_step_is_bounded_by_the_explicit_part_only():
     with pytest.raises(ConfigError, match="pair damping"):
         make_config(integrator="fold", dt=5e-7, eta=3e6)
     with pytest.raises(ConfigError, match="'integrator'"):
-        make_config(integrator="adaptive")
+        make_config(integrator="rk4")

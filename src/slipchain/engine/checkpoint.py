@@ -46,8 +46,8 @@ from .observers import Recorder
 
 FORMAT = 1  # bumped whenever the layout below changes; a checkpoint of another format is refused
 CHECKPOINT_EVERY = 60.0  # default wall-time seconds between checkpoints (slipchain run --checkpoint-every)
-# The batch's arrays; geometry, shape and the elastic kernel follow from the configs (Batch.pack).
-_BATCH_FIELDS = [f.name for f in fields(Batch) if f.name not in ("geometry", "shape", "kernel")]
+# The batch's arrays; geometry, shape, the elastic kernel and the adaptive step's folds and control follow from the configs (Batch.pack).
+_BATCH_FIELDS = [f.name for f in fields(Batch) if f.name not in ("geometry", "shape", "kernel", "folds", "step_control")]
 
 
 class CheckpointError(ValueError):

@@ -18,16 +18,33 @@ import numpy as np
 
 from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
-from ..results.observables import steady_estimate, window_velocity
+from ..results.observables import count_cycles, steady_estimate, window_velocity
 from ..results.schema import Status, after_ramp, dead_weight_velocity, velocity_decided
 from . import scheme as S
 
 DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace each time it has grown by 2 %
 # (each classification fits the whole trace: checking every chunk would cost as much as the run)
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
+LONG_CHUNK_TIME = 0.05  # ... for runs with min_cycles (epsilon = 1: runs of tens of seconds, 1 ms samples)
 MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
 MIN_STEADY_SLIDE = 1e-6  # ...and a steady window in which the drive has moved at least this far (m):
 # at very low v_d a steady start can look converged (tiny SE, no drift) long before it has settled
+
+
+def chunk_samples(cfg, interval: float) -> int:
+    """Output samples per compiled chunk: CHUNK_TIME of simulated time, LONG_CHUNK_TIME with
+    ``min_cycles`` (runs of tens of seconds: the per-contact sums are kept per chunk, and the
+    checkpoint holds them); at least one sample."""
+    return max(1, int(round((LONG_CHUNK_TIME if cfg.min_cycles else CHUNK_TIME) / interval)))
+
+
+def geometric_check_index(n: int, n_first: int) -> int:
+    """Checks at n_first*(1 + DECIDE_EVERY)**k samples: the index k of the last one passed by ``n``
+    (-1 before the first). A function of the sample count alone, so a resumed run checks where
+    the uninterrupted one did."""
+    if n < n_first:
+        return -1
+    return int(np.floor(np.log(n / n_first) / np.log1p(DECIDE_EVERY) + 1e-12))
 
 
 @dataclass
@@ -35,7 +52,15 @@ class UntilConverged:
     """The automatic run length: stop once the standard error of mu_star is at most ``sem_target``,
     the steady window (MSER) holds at least MIN_STEADY_SAMPLES samples, shows no drift, has seen
     the drive move MIN_STEADY_SLIDE, and the slider follows the drive there (within half the
-    after-run displacement check's tolerance)."""
+    after-run displacement check's tolerance).
+
+    With ``min_cycles`` > 0 (issue 12: the long slip cycles at epsilon = 1) the steady window must
+    also hold that many cycles of f_d (:func:`~slipchain.results.observables.count_cycles`: for
+    system-wide stick-slip, slip events; the batch-means SE of a window of a few cycles is not to be
+    trusted) unless its standard deviation is below ``sem_target`` (steady sliding), and the conditions are checked each time the trace has grown by DECIDE_EVERY (runs of
+    10**5 samples and more: checking every chunk would cost more than the run). Without it the
+    checks run after every chunk, as before.
+    """
 
     system: System
     x0_mean: float
@@ -50,14 +75,27 @@ class UntilConverged:
         cfg = self.system.config
         self.f_d.append(out_row[:, S.O_FD])
         self.x_mean.append(out_row[:, S.O_XMEAN])
-        fd = np.concatenate(self.f_d)
-        est = steady_estimate(fd / mu_star_norm(self.system))
+        if cfg.min_cycles:
+            n = sum(a.shape[0] for a in self.f_d)
+            if (geometric_check_index(n, MIN_STEADY_SAMPLES)
+                    == geometric_check_index(n - out_row.shape[0], MIN_STEADY_SAMPLES)):
+                return self.reached
+            self.f_d, self.x_mean = [np.concatenate(self.f_d)], [np.concatenate(self.x_mean)]
+        fd = np.concatenate(self.f_d) / mu_star_norm(self.system)
+        est = steady_estimate(fd)
         self.sem = est.sem
         if (est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target
                 and est.n_samples * self.interval * cfg.v_d >= MIN_STEADY_SLIDE
-                and self._follows_drive(np.concatenate(self.x_mean), est.start)):
+                and self._follows_drive(np.concatenate(self.x_mean), est.start)
+                and (not cfg.min_cycles or self._cycles_ok(fd[est.start:]))):
             self.reached = True
         return self.reached
+
+    def _cycles_ok(self, window: np.ndarray) -> bool:
+        """min_cycles cycles in the steady window, or a window that varies less than sem_target
+        (steady sliding: no cycles to count, and no sample farther from the mean than the target)."""
+        cfg = self.system.config
+        return bool(window.std() <= cfg.sem_target or count_cycles(window) >= cfg.min_cycles)
 
     def _follows_drive(self, x_mean: np.ndarray, start: int) -> bool:
         v = window_velocity(x_mean, start, self.x0_mean, self.interval)
@@ -95,11 +133,8 @@ class UntilDecided:
         return self.reached
 
     def _check_index(self, n: int) -> int:
-        """Checks fall at n_first*(1 + DECIDE_EVERY)**k: a chunk end checks when it passes the next one
-        (a function of the sample count alone, so a resumed run checks where the uninterrupted one did)."""
-        if n < self.n_first:
-            return -1
-        return int(np.floor(np.log(n / self.n_first) / np.log1p(DECIDE_EVERY) + 1e-12))
+        """Checks fall at n_first*(1 + DECIDE_EVERY)**k: a chunk end checks when it passes the next one."""
+        return geometric_check_index(n, self.n_first)
 
 
 @dataclass
@@ -182,5 +217,5 @@ def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     )
 
 
-__all__ = ["CHUNK_TIME", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
+__all__ = ["CHUNK_TIME", "LONG_CHUNK_TIME", "chunk_samples", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
            "row_control"]

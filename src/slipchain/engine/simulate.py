@@ -25,7 +25,7 @@ from ..results.checks import stored_energy
 from ..results.schema import assemble_run
 from .backends import BackendName, Batch, get_backend
 from .checkpoint import CHECKPOINT_EVERY, Checkpointer
-from .control import CHUNK_TIME, row_control
+from .control import chunk_samples, row_control
 from .driver import drive
 from .memory import check_memory
 from .observers import ProgressBar, Recorder
@@ -64,7 +64,8 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
                    checkpoint_every: float = CHECKPOINT_EVERY) -> list[xr.Dataset]:
     """Integrate several realisations together (one backend call advances all of them).
 
-    They must share N, dt and the output interval (one kernel launch runs them in lock-step);
+    They must share N, dt, the output interval and whether ``min_cycles`` is set (one kernel launch
+    runs them in lock-step, in chunks of :func:`.control.chunk_samples`);
     each row has its own length control (fixed, automatic, dead-weight ramp) and stops on its
     own: a finished row is skipped by the kernel. On the GPU this is how a sweep fills the device.
     The wall time recorded for every row is the batch's. ``checkpoint``: see :func:`run` (one file
@@ -73,9 +74,9 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     cfg0 = systems[0].config
     for s in systems:
         c = s.config
-        if (c.N, c.dt, c.sample_steps) != (cfg0.N, cfg0.dt, cfg0.sample_steps):
-            raise ValueError("a batch needs equal N, dt and output_interval; got "
-                             f"{(c.N, c.dt, c.output_interval)} and {(cfg0.N, cfg0.dt, cfg0.output_interval)}")
+        if (c.N, c.dt, c.sample_steps, bool(c.min_cycles)) != (cfg0.N, cfg0.dt, cfg0.sample_steps, bool(cfg0.min_cycles)):
+            raise ValueError("a batch needs equal N, dt, output_interval and min_cycles > 0 or not; got "
+                             f"{(c.N, c.dt, c.output_interval, c.min_cycles)} and {(cfg0.N, cfg0.dt, cfg0.output_interval, cfg0.min_cycles)}")
     check_memory([s.config for s in systems])  # MemoryEstimateError before the batch is allocated
     engine = get_backend(backend)
     states0 = [initial_state(s) if states is None or states[i] is None else states[i].copy()
@@ -98,7 +99,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     wall0 = time.perf_counter()
     if saver is not None:
         saver.attach(systems, batch, controls, recorder, x0, e0, wall0, wall_before, resumed_at, engine.name, interval)
-    drive(engine, batch, controls, sample_steps=sample_steps, chunk=max(1, int(round(CHUNK_TIME / interval))),
+    drive(engine, batch, controls, sample_steps=sample_steps, chunk=chunk_samples(cfg0, interval),
           interval=interval, observers=observers, checkpoint=saver)
     wall = wall_before + time.perf_counter() - wall0
     out = [assemble_run(s, recorder.recording(i), batch.state(i), x0_mean=x0[i], e0=e0[i], interval=interval,

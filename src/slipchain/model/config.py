@@ -26,7 +26,10 @@ ALLOWED: dict[str, str] = {
     "N": "an integer >= 3 (blocks per chain; blocks along the sliding direction x, Lx, in 2-D)",
     "Ly": "an integer >= 1 (blocks across the sliding direction, y; 1 for the chain)",
     "geometry": "one of 'chain', 'chain2d', 'slab', 'halfspace'",
-    "integrator": "one of 'fixed' (dt below the unique-root limit), 'fold' (fold-aware contacts, issue 12)",
+    "integrator": "one of 'fixed' (dt below the unique-root limit), 'fold' (fold-aware contacts, issue 12), "
+                  "'adaptive' (fold-aware contacts and a step that doubles up to the explicit limit)",
+    "step_tol": "a number > 0 (integrator = 'adaptive': largest local velocity error per step, in units of v_d)",
+    "min_cycles": "an integer >= 0 (automatic length: slip cycles the steady window must hold; 0 for none)",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
     "c": "a number >= 0",
     "v0": "a number > 0 (m/s)",
@@ -59,11 +62,12 @@ LEGACY_KEYS: dict[str, str] = {
 
 # Keys added after 0.2 with a value that means "as before" (the chain): left out of the TOML text and
 # of sweep member ids while at it, so stored runs and stores stay valid.
-OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed"}
+OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0}
 _NOT_OFF = object()
 
 # The explicit 2-D steps keep dt*omega_max below this fraction of symplectic Euler's limit 2.
 STABLE_FRACTION = 0.9
+MAX_STEP_LEVELS = 6  # integrator = 'adaptive': the step doubles at most this often (dt ... 64 dt)
 
 
 class ConfigError(ValueError):
@@ -117,7 +121,9 @@ class Config(BaseModel):
     dead_weight: float | None = Field(None, gt=0)
     geometry: Literal["chain", "chain2d", "slab", "halfspace"] = "chain"
     Ly: int = Field(1, ge=1)
-    integrator: Literal["fixed", "fold"] = "fixed"
+    integrator: Literal["fixed", "fold", "adaptive"] = "fixed"
+    step_tol: float = Field(0.01, gt=0)
+    min_cycles: int = Field(0, ge=0)
 
     dt: float = Field(2e-8, gt=0)
     t_total: float | None = Field(None, gt=0)
@@ -167,7 +173,16 @@ class Config(BaseModel):
             if not self.t_ramp < end:
                 raise ValueError(_message("t_ramp", self.t_ramp, f"shorter than {name} = {end:g} (the velocity is "
                                           "measured after the ramp)"))
-        if self.integrator == "fold":
+        if self.integrator != "adaptive" and self.step_tol != OFF["step_tol"]:
+            raise ValueError(_message("step_tol", self.step_tol, "absent unless integrator = 'adaptive' (it is the "
+                                      "adaptive step's tolerance)"))
+        if self.min_cycles and (self.t_total is not None or self.dead_weight is not None):
+            raise ValueError(_message("min_cycles", self.min_cycles, "0 (absent) with t_total or dead_weight: it is a "
+                                      "condition of the spring drive's automatic run length"))
+        if self.integrator == "adaptive" and self.geometry not in ("chain", "chain2d"):
+            raise ValueError(_message("integrator", self.integrator, f"'fixed' or 'fold' with geometry = "
+                                      f"'{self.geometry}' (the adaptive step runs the chains only, so far)"))
+        if self.integrator in ("fold", "adaptive"):
             self._check_fold_step()
             return self
         dt_max = self.dt_unique_root_limit
@@ -198,17 +213,32 @@ class Config(BaseModel):
         self._check_explicit_step(f"for geometry = '{self.geometry}'")
 
     def _check_fold_step(self) -> None:
-        """integrator = 'fold' (issue 12): the contact equation may have several roots (the solver
+        """integrator = 'fold' or 'adaptive' (issue 12): the contact equation may have several roots (the solver
         picks the branch), so dt is bounded by the explicit part alone: the springs,
         dt*omega_max < 1.8, and the explicit pair damping, dt*2z*eta < 1.8 (z neighbours and the
         other layer: 6 for the chain, 10 for chain2d)."""
         if self.geometry == "chain":  # (the 2-D geometries checked omega_max already)
-            self._check_explicit_step("with integrator = 'fold'")
-        rate = {"chain": 6.0, "chain2d": 10.0}.get(self.geometry, 0.0) * self.eta
+            self._check_explicit_step(f"with integrator = '{self.integrator}'")
+        rate = self._damping_rate
         if rate > 0 and not self.dt * rate < 2.0 * STABLE_FRACTION:
             raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / rate:.3g} s with integrator = "
-                                      "'fold': the explicit pair damping needs dt*(2 z eta) < "
+                                      f"'{self.integrator}': the explicit pair damping needs dt*(2 z eta) < "
                                       f"{2.0 * STABLE_FRACTION:g} (z neighbours and the other layer)"))
+
+    @property
+    def _damping_rate(self) -> float:
+        """2 z eta of the explicit pair damping (z neighbours and the other layer), 0 off the chains."""
+        return {"chain": 6.0, "chain2d": 10.0}.get(self.geometry, 0.0) * self.eta
+
+    @property
+    def step_levels(self) -> int:
+        """integrator = 'adaptive': how often the step may double, dt * 2**k, while staying within the
+        explicit bounds (dt*omega_max and dt*2 z eta below 1.8), at most MAX_STEP_LEVELS."""
+        rate = max(self.omega_max, self._damping_rate)
+        k = 0
+        while k < MAX_STEP_LEVELS and self.dt * 2.0 ** (k + 1) * rate < 2.0 * STABLE_FRACTION:
+            k += 1
+        return k
 
     def _check_explicit_step(self, context: str) -> None:
         """dt*omega_max < STABLE_FRACTION*2 (symplectic Euler's limit is 2); ``context`` says why it applies."""

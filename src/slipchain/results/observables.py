@@ -72,6 +72,23 @@ def window_velocity(x_mean: np.ndarray, start: int, x0_mean: float, interval: fl
     return float((x_mean[-1] - x_start) / ((x_mean.shape[0] - start) * interval))
 
 
+CYCLE_BAND = 0.5  # count_cycles: the trigger levels, mean -+ CYCLE_BAND standard deviations
+
+
+def count_cycles(y: np.ndarray, band: float = CYCLE_BAND) -> int:
+    """Completed cycles of a fluctuating series: the falls from above mean + band*std to below
+    mean - band*std (a Schmitt trigger, so that noise around the mean is not counted). For the
+    sawtooth of system-wide stick-slip one per slip event; for uncorrelated noise about one per
+    few samples (the run-length condition ``min_cycles``, :class:`slipchain.engine.control.UntilConverged`)."""
+    y = np.asarray(y, dtype=float)
+    if y.size < 2:
+        return 0
+    mean, std = y.mean(), y.std()
+    hi, lo = y > mean + band * std, y < mean - band * std
+    state = hi[hi | lo]
+    return int(np.count_nonzero(state[:-1] & ~state[1:]))
+
+
 def steady_estimate(y: np.ndarray, n_batches: int = 20, drift_sigmas: float = 4.0) -> SteadyEstimate:
     """MSER truncation, then batch-means mean and SE of what remains, plus the drift check."""
     y = np.asarray(y, dtype=float)

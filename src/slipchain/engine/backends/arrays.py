@@ -81,7 +81,7 @@ class ArrayBackend:
             raise ValueError(f"geometry = '{batch.geometry}' has no elastic kernel: the array backend runs 'slab' "
                              "and 'halfspace' only")
         if np.any(batch.params[:, P_FOLD] > 0):
-            raise ValueError("integrator = 'fold' runs on the numba CPU path only in this version (backend='cpu')")
+            raise ValueError("integrator = 'fold' or 'adaptive' runs on the numba CPU path only in this version (backend='cpu')")
         xp, fft = self.xp, self.fft
         b, n = batch.x.shape
         lx, ly = batch.shape

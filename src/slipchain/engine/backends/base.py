@@ -24,6 +24,9 @@ class Batch:
 
     ``geometry`` and ``shape`` = (Lx, Ly) are the batch's (all rows share them); ``kernel`` holds
     a**2 k(q) on the rfft2 grid of each row, (B, Lx, Ly//2 + 1), for 'slab' and 'halfspace'.
+    With integrator = 'adaptive' (all rows or none), ``folds`` (B, levels + 1, 2, C) holds each
+    contact's folds at dt * 2**k and ``step_control`` (B, 3) the tolerance in m/s (step_tol*v_d),
+    the number of doublings and a count of the steps taken (:mod:`.adaptive`).
     """
 
     x: np.ndarray
@@ -40,12 +43,17 @@ class Batch:
     geometry: str = "chain"
     shape: tuple[int, int] = (0, 1)
     kernel: np.ndarray | None = None
+    folds: np.ndarray | None = None
+    step_control: np.ndarray | None = None
 
     @classmethod
     def pack(cls, systems: list[System], states: list[State]) -> "Batch":
         c0 = systems[0].config
         if any((s.config.N, s.config.Ly, s.config.geometry) != (c0.N, c0.Ly, c0.geometry) for s in systems):
             raise ValueError("all realisations of a batch must have the same N, Ly and geometry")
+        adaptive = c0.integrator == "adaptive"
+        if any((s.config.integrator == "adaptive") != adaptive for s in systems):
+            raise ValueError("a batch runs integrator = 'adaptive' in all its rows or in none")
         b = len(systems)
         cmax = max(1, max(s.n_contacts for s in systems))
         params = np.zeros((b, S.N_PARAMS))
@@ -53,6 +61,9 @@ class Batch:
         vstar = np.ones((b, cmax))
         ncon = np.zeros(b, dtype=np.int64)
         ysolve = np.zeros((b, S.N_YS, cmax))
+        levels = max(s.config.step_levels for s in systems) if adaptive else 0
+        folds = np.zeros((b, levels + 1, 2, cmax)) if adaptive else None
+        step_control = np.zeros((b, 3)) if adaptive else None
         for r, s in enumerate(systems):
             params[r] = kernel_params(s)
             c = s.n_contacts
@@ -70,6 +81,14 @@ class Batch:
                 cf = s.config
                 ysolve[r, S.Y_FA, :c], ysolve[r, S.Y_FB, :c] = S.fold_points(
                     cf.m * (1.0 + cf.dt * cf.eta_c) * s.vstar, cf.dt * cf.epsilon * cf.f0, cf.c)
+            if adaptive:
+                cf = s.config
+                step_control[r] = cf.step_tol * cf.v_d, cf.step_levels, 0.0
+                folds[r, :, 0], folds[r, :, 1] = np.inf, -np.inf
+                for k in range(cf.step_levels + 1):
+                    h = cf.dt * 2.0**k
+                    folds[r, k, 0, :c], folds[r, k, 1, :c] = S.fold_points(
+                        cf.m * (1.0 + h * cf.eta_c) * s.vstar, h * cf.epsilon * cf.f0, cf.c)
         return cls(
             x=np.stack([s.x for s in states]).astype(float),
             u=np.stack([s.u for s in states]).astype(float),
@@ -85,6 +104,8 @@ class Batch:
             geometry=c0.geometry,
             shape=(c0.N, c0.Ly),
             kernel=_kernels(systems),
+            folds=folds,
+            step_control=step_control,
         )
 
     def state(self, row: int) -> State:
@@ -125,7 +146,7 @@ def kernel_params(system: System) -> np.ndarray:
     p[S.P_ETAC] = cfg.eta_c
     p[S.P_SLOW] = SLOW_FRACTION * cfg.v_d
     p[S.P_LY] = cfg.Ly
-    p[S.P_FOLD] = 1.0 if cfg.integrator == "fold" else 0.0
+    p[S.P_FOLD] = 0.0 if cfg.integrator == "fixed" else 1.0  # fold-aware contacts: fold, adaptive
     if cfg.geometry == "chain2d":
         p[S.P_LAT] = 1.0
         p[S.P_KY] = cfg.K_Y

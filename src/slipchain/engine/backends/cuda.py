@@ -254,7 +254,7 @@ class CUDABackend:
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
         if np.any(batch.params[:, S.P_FOLD] > 0):
-            raise ValueError("integrator = 'fold' runs on the CPU backend only in this version (backend='cpu')")
+            raise ValueError("integrator = 'fold' or 'adaptive' runs on the CPU backend only in this version (backend='cpu')")
         if batch.geometry != "chain":
             if batch.kernel is None:
                 raise ValueError(f"geometry = '{batch.geometry}' runs on the CPU backend only in this version "

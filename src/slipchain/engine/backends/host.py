@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scheme import N_ACC, N_CACC, N_OUT
-from . import cpu, spectral
+from . import adaptive, cpu, spectral
 from .base import Batch, ChunkOutput
 
 
@@ -22,6 +22,11 @@ class CPUBackend:
         out = np.zeros((b, n_samples, N_OUT))
         acc = np.zeros((b, N_ACC))
         cacc = np.zeros((b, N_CACC, batch.sites.shape[1]))
+        if batch.folds is not None:  # integrator = 'adaptive'
+            adaptive.advance(batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar,
+                             batch.n_contacts, batch.ysolve, batch.folds, batch.step_control, n_samples, sample_steps,
+                             out, acc, cacc, batch.status)
+            return ChunkOutput(out, acc, cacc)
         cpu.advance(batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar,
                     batch.n_contacts, batch.ysolve, n_samples, sample_steps, out, acc, cacc, batch.status)
         return ChunkOutput(out, acc, cacc)

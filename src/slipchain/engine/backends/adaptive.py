@@ -1,0 +1,171 @@
+"""integrator = 'adaptive' (issue 12): the fold-aware scheme with a step that doubles while nothing happens.
+
+At the physical contact stiffness (epsilon = 1) a slip cycle is a few milliseconds of slip and
+about a second of reloading, during which every contact sits on its sticking branch and the
+chain creeps. The fold-aware contact solve (:func:`~slipchain.engine.scheme.solve_contact_fold`)
+has no step limit of its own, so the step is bounded only by the explicit springs and dampers
+(Config: dt*omega_max and dt*2 z eta below 1.8). This kernel runs the scheme of
+:mod:`slipchain.engine.scheme` unchanged (the CPU's compiled parts: :mod:`.cpu`) with a step
+h = dt * 2**k, k = 0 ... ``Config.step_levels``:
+
+* **Error estimate.** For a first-order step the local velocity error is ~ h**2/2 |du/dt'|; it is
+  estimated from two consecutive steps as ``err = h/2 * max_i |a_i^n - a_i^(n-1)|`` over both
+  chains' blocks, a_i^n = (u_i^(n+1) - u_i^n)/h (at creep ~0; at a slip event, or while fast modes
+  ring, large).
+* **Control.** After each step: while err > tol (``step_tol * v_d``, m/s) the level drops by one
+  (the estimate falling by 4 per halving); if err < tol/8 the level rises by one. Steps are not
+  rejected: the step on which an event starts is taken at the coarse level (its fold at that
+  step's dt: the fold moves towards the maximum of f as dt grows), the next ones at the fine level.
+* **Time grid.** A step of level k starts only where the base-step count within the output sample
+  is a multiple of 2**k and ends within the sample: the samples (and the drive, v_d t with t the
+  base-step count times dt) are those of the fixed step. Each sample starts at level 0 with no
+  estimate, so that nothing but the batch's arrays carries from one sample to the next: a run
+  resumed from a checkpoint is bit for bit the uninterrupted one.
+* **Sums** (f_d per sample, per-contact sums, works) are weighted by the step: in base steps, so
+  the recorder's averages are time averages.
+
+``step_tol`` -> 0 gives the fold integrator at dt (every step at level 0): tests/physics/test_adaptive.py.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, O_FD, O_XMEAN, O_XUMEAN, P_AMP, P_ETAC,
+                      P_KLY, P_KY, P_LAT, P_LY, P_ML, Y_FA, Y_FB)
+from .cpu import _contacts, _explicit_forces, _explicit_forces_2d, _move, _refresh_solver, row_parameters
+
+STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step multiplies err by ~4)
+
+
+@nb.njit(cache=True)
+def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
+    """Per-contact sums as the fixed step's, each step counted ``w`` times (its base steps); returns sum f*u."""
+    p = 0.0
+    for k in range(nc):
+        ca[C_F, k] += w * fk[k]
+        ca[C_U, k] += w * uk[k]
+        ca[C_U2, k] += w * uk[k] * uk[k]
+        ca[C_SLOW, k] += w if abs(uk[k]) < slow else 0.0
+        p += fk[k] * uk[k]
+    return p
+
+
+@nb.njit(cache=True)
+def _error(n, ur, Ur, un, Un, aprev, h, have):
+    """h/2 max |a^n - a^(n-1)| over both chains (0 without a previous step); stores a^n in ``aprev``."""
+    err = 0.0
+    for i in range(n):
+        a1 = (un[i] - ur[i]) / h
+        a2 = (Un[i] - Ur[i]) / h
+        if have:
+            err = max(err, abs(a1 - aprev[i]), abs(a2 - aprev[n + i]))
+        aprev[i] = a1
+        aprev[n + i] = a2
+    return 0.5 * h * err
+
+
+@nb.njit(cache=True)
+def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, control, n_samples, sample_steps,
+            out, acc, cacc, status):
+    """:func:`slipchain.engine.backends.cpu.advance` with the adaptive step (module docstring).
+
+    Extra inputs: folds (B, L + 1, 2, C), the contacts' folds at dt*2**k; control (B, 3): tol [m/s],
+    the highest level, and (in/out) the count of steps taken. ``step`` counts base steps (dt), as with the fixed step.
+    """
+    nb_rows, n = x.shape
+    cmax = sites.shape[1]
+    un = np.empty(n)
+    Un = np.empty(n)
+    dampx = np.empty(n)
+    dampX = np.empty(n)
+    rk = np.empty(cmax)
+    ra = np.empty(cmax)
+    uk = np.empty(cmax)
+    fk = np.empty(cmax)
+    ok = np.empty(cmax, dtype=np.bool_)
+    aprev = np.empty(2 * n)
+    for row in range(nb_rows):
+        if status[row] >= 0:
+            continue
+        K, KL, KT, Kd, m, meta, vd, fconst, dt0, _, _, _, c, _, slow = row_parameters(params[row])
+        amp = params[row, P_AMP]
+        etac = params[row, P_ETAC]
+        mL = params[row, P_ML]
+        lattice = params[row, P_LAT] > 0.0
+        ly = int(params[row, P_LY])
+        KY = params[row, P_KY]
+        KLY = params[row, P_KLY]
+        tol = control[row, 0]
+        top = int(control[row, 1])
+        nc = n_contacts[row]
+        xr = x[row]
+        ur = u[row]
+        Xr = X[row]
+        Ur = U[row]
+        ys = ysolve[row]
+        ca = cacc[row]
+        vs = vstar[row]
+        st = sites[row]
+        w_drive = 0.0
+        w_damp = 0.0
+        w_contact = 0.0
+        for s in range(n_samples):
+            _refresh_solver(nc, ys, c)
+            fd_sum = 0.0
+            j = 0
+            level = 0
+            loaded = -1
+            have = False
+            while j < sample_steps:
+                while level > 0 and (j % (1 << level) != 0 or j + (1 << level) > sample_steps):
+                    level -= 1
+                if level != loaded:
+                    for k in range(nc):
+                        ys[Y_FA, k] = folds[row, level, 0, k]
+                        ys[Y_FB, k] = folds[row, level, 1, k]
+                    loaded = level
+                w = 1 << level
+                h = dt0 * w
+                drive = vd * (step[row] * dt0)
+                if lattice:
+                    fsum = _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
+                                               drive, fconst, h / m, h / mL)
+                else:
+                    fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst,
+                                            h / m, h / mL)
+                _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m * (1.0 + h * etac), h * amp, c, 1.0 / h, True)
+                err = _error(n, ur, Ur, un, Un, aprev, h, have)
+                w_contact -= _weighted_contact_sums(nc, fk, uk, ca, slow, w) * h
+                w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+                w_drive += fsum * vd * h
+                fd_sum += fsum / n * w
+                step[row] += w
+                j += w
+                control[row, 2] += 1.0
+                if have:
+                    if err > tol:
+                        while level > 0 and err > tol:
+                            level -= 1
+                            err *= 0.25
+                    elif err < STEP_UP * tol and level < top:
+                        level += 1
+                have = True
+            xs = 0.0
+            Xs = 0.0
+            for i in range(n):
+                xs += xr[i]
+                Xs += Xr[i]
+            out[row, s, O_FD] += fd_sum / sample_steps
+            out[row, s, O_XMEAN] += xs / n
+            out[row, s, O_XUMEAN] += Xs / n
+            if not (np.isfinite(fd_sum) and np.isfinite(xs) and np.isfinite(w_contact)):
+                status[row] = step[row]
+                break
+        acc[row, A_WDRIVE] += w_drive
+        acc[row, A_WDAMP] += w_damp
+        acc[row, A_WCONTACT] += w_contact
+
+
+__all__ = ["STEP_UP", "advance"]
