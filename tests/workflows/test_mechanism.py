@@ -4,6 +4,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 
@@ -163,7 +164,7 @@ def _tiny_store(path, grids, base=None):
 def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
     py = [sys.executable, "-m", "slipchain", "figure"]
     _tiny_store(tmp_path / "vel", {"v_d": [1e-4, 1e-3], "theta": [0.5, 1.0], "seed": [0, 1]})
-    _tiny_store(tmp_path / "eps", [{"epsilon": [1e-2], "dt": [2e-8], "theta": [0.5, 1.0], "seed": [0]},
+    eps_store = _tiny_store(tmp_path / "eps", [{"epsilon": [1e-2], "dt": [2e-8], "theta": [0.5, 1.0], "seed": [0]},
                                    {"epsilon": [5e-3], "dt": [1e-8], "theta": [0.5, 1.0], "seed": [0]}])
     _tiny_store(tmp_path / "dw", {"dead_weight": [0.5, 0.9, 1.05], "theta": [1.0]},
                 base={"N": 3, "theta": 1 / 3, "delta": 0.0, "t_total": 4e-3})
@@ -174,6 +175,25 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert eps.returncode == 0, eps.stderr
     assert "epsilon = 0.01:" in eps.stdout and "epsilon = 0.005:" in eps.stdout and "ratio" in eps.stdout
+    # issue 12: the figure extended by a store at another base epsilon (rows at v_d = v0 only) and an index CSV
+    eps_store.write_index()
+    _tiny_store(tmp_path / "eps2", {"v_d": [0.01, 0.003], "theta": [0.5, 1.0], "seed": [0]},
+                base={"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3, "epsilon": 2e-3})
+    both = subprocess.run(py + ["epsilon", "--store", str(tmp_path / "eps2"), "--index", str(tmp_path / "eps" / "index.csv"),
+                                "--out", str(tmp_path / "o2")], capture_output=True, text=True, timeout=120)
+    assert both.returncode == 0, both.stderr
+    lines = [line for line in both.stdout.splitlines() if line.startswith("epsilon = ")]
+    assert [line.split(":")[0] for line in lines] == ["epsilon = 0.002", "epsilon = 0.005", "epsilon = 0.01"]
+    assert [line for line in lines if "0.01:" in line][0] in eps.stdout  # the same numbers as from the store alone
+    rows = pd.read_csv(tmp_path / "o2" / "epsilon-index.csv")
+    assert len(rows) == 6 and sorted(rows["epsilon"].unique()) == [0.002, 0.005, 0.01]
+    assert (tmp_path / "o2" / "epsilon.png").stat().st_size > 5000
+    twice = subprocess.run(py + ["epsilon", "--store", str(tmp_path / "eps"), "--index", str(tmp_path / "eps" / "index.csv"),
+                                 "--out", str(tmp_path / "o3")], capture_output=True, text=True, timeout=120)
+    assert twice.returncode == 2 and "same (epsilon, dt, theta, seed)" in twice.stderr and not (tmp_path / "o3").exists()
+    nofile = subprocess.run(py + ["epsilon", "--index", str(tmp_path / "none.csv"), "--out", str(tmp_path / "o3")],
+                            capture_output=True, text=True, timeout=120)
+    assert nofile.returncode == 2 and "none.csv" in nofile.stderr and not (tmp_path / "o3").exists()
     dw = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--out", str(tmp_path / "o")],
                         capture_output=True, text=True, timeout=120)
     assert dw.returncode == 0, dw.stderr

@@ -16,6 +16,7 @@ import tomllib
 from typing import Any
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from ..model.config import Config
@@ -108,6 +109,42 @@ def epsilon_table(ds: xr.Dataset) -> xr.Dataset:
     return avg
 
 
+EPSILON_COLUMNS = ("epsilon", "dt", "theta", "seed", "status", "mu_star", "mu_star_sem")
+
+
+def epsilon_rows(ds: xr.Dataset) -> pd.DataFrame:
+    """The members of a sweep Dataset as rows for the combined epsilon figure (:func:`epsilon_frame_table`):
+    epsilon and dt from the base config where not swept, and only the rows at the epsilon
+    study's held values, v_d = v0 and eta_c = 0.1 omega0, where the sweep varies them."""
+    cfg = base_config(ds)
+    df = ds[["mu_star", "mu_star_sem", "status"]].to_dataframe().reset_index()
+    for key, held in (("v_d", cfg.v0), ("eta_c", 0.1 * cfg.omega0)):
+        if key in df:
+            df = df[np.isclose(df[key].astype(float), held, rtol=1e-9)]
+    for key in ("epsilon", "dt"):
+        if key not in df:
+            df[key] = getattr(cfg, key)
+    if "seed" not in df:
+        df["seed"] = cfg.seed
+    return df[list(EPSILON_COLUMNS)]
+
+
+def epsilon_frame_table(frame: pd.DataFrame) -> xr.Dataset:
+    """:func:`epsilon_table` of rows from several sources (stores by :func:`epsilon_rows`, or sweep
+    index CSVs with the columns EPSILON_COLUMNS): seed averages on (epsilon, theta), each epsilon at
+    the dt with the most data. Two rows for one (epsilon, dt, theta, seed) are an error."""
+    missing = [c for c in EPSILON_COLUMNS if c not in frame]
+    if missing:
+        raise ValueError(f"the epsilon rows lack column(s) {missing}; expected {list(EPSILON_COLUMNS)}")
+    key = ["epsilon", "dt", "theta", "seed"]
+    dup = frame.duplicated(key)
+    if dup.any():
+        raise ValueError(f"two sources give the same (epsilon, dt, theta, seed): {frame[dup][key].values.tolist()[:3]}")
+    ds = frame.set_index(key).to_xarray()
+    ds["status"] = ds["status"].fillna(Status.ABSENT.value).astype(str)
+    return epsilon_table(ds)
+
+
 def load_drops(avg: xr.Dataset, dim: str) -> list[dict[str, float]]:
     """For each value of ``dim`` in a seed average with a ``theta`` dimension: mu_star at the
     smallest and the largest theta with data, and their ratio with its error."""
@@ -124,5 +161,6 @@ def load_drops(avg: xr.Dataset, dim: str) -> list[dict[str, float]]:
     return rows
 
 
-__all__ = ["FIG6_DIMS", "MAIN_N", "base_config", "drive_velocities", "epsilon_table", "load_drops", "main_average", "main_n",
+__all__ = ["EPSILON_COLUMNS", "FIG6_DIMS", "MAIN_N", "base_config", "drive_velocities", "epsilon_frame_table",
+           "epsilon_rows", "epsilon_table", "load_drops", "main_average", "main_n",
            "main_selection", "ratio", "ratios_to_first", "seed_average"]

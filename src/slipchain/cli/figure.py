@@ -117,12 +117,15 @@ def velocity(
 
 @figure_app.command("epsilon")
 def epsilon(
-    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over epsilon and theta (presets/epsilon.toml).")],
     out_dir: OutOpt,
+    store: Annotated[Optional[list[Path]], typer.Option("--store", help="Store of a sweep over epsilon and theta (presets/epsilon.toml); repeat it to combine stores (each at its base epsilon, e.g. presets/fig6-eps1.toml's).")] = None,
+    index: Annotated[Optional[list[Path]], typer.Option("--index", help="Index CSV of an epsilon sweep (e.g. docs/mechanism/epsilon-index.csv), combined with the stores; repeatable.")] = None,
 ) -> None:
     """mu_star versus theta for each epsilon, and the drop from the smallest theta to the largest."""
+    stores = list(store or [])
     try:
-        paths, lines = _figures().epsilon(store, out_dir)
+        paths, lines = _figures().epsilon(stores[0] if stores else None, out_dir, more_stores=tuple(stores[1:]),
+                                          indexes=tuple(index or []))
     except SweepError as e:
         fail(str(e))
     wrote(paths)

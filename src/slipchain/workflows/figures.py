@@ -13,11 +13,12 @@ from ..analysis.experiment import model_overlay
 from ..analysis.fig6 import contact_law_dataset, fig6_figure_data
 from ..analysis.mechanism import velocity_figure_data
 from ..analysis.reports import epsilon_lines
-from ..analysis.statistics import epsilon_table
+from ..analysis.statistics import epsilon_frame_table, epsilon_rows, epsilon_table
 from ..model.config import load_config
 from ..plots.mechanism import plot_dead_weight, plot_epsilon, plot_velocity
 from ..plots.paper import plot_fig5, plot_fig6
 from ..plots.tester import plot_model_vs_experiment
+from ..results.io import write_csv
 from ..results.schema import Status
 from ..sweeps.definition import SweepError, SweepWarning
 from ..sweeps.store import Store
@@ -97,10 +98,37 @@ def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
     return plot_dead_weight(sweep_dataset(store, {"dead_weight"}, "the dead-weight figure"), out)
 
 
-def epsilon(store: str | os.PathLike, out: str | os.PathLike) -> tuple[list[Path], list[str]]:
-    """The epsilon figure, and one line per epsilon with the drop of mu_star from the smallest theta to the largest."""
-    avg = epsilon_table(sweep_dataset(store, {"epsilon", "theta"}, "the epsilon figure"))
-    return plot_epsilon(avg, out), epsilon_lines(avg)
+def epsilon(store: str | os.PathLike | None, out: str | os.PathLike, *, more_stores: tuple = (),
+            indexes: tuple = ()) -> tuple[list[Path], list[str]]:
+    """The epsilon figure, and one line per epsilon with the drop of mu_star from the smallest theta to the largest.
+
+    From one store sweeping epsilon and theta; or (issue 12: the figure extended to epsilon = 1)
+    from several sources: stores sweeping theta (each at its base epsilon if epsilon is not swept;
+    rows at v_d = v0 and eta_c = 0.1 omega0 where a store varies them) and sweep index CSVs
+    (``indexes``, e.g. the committed docs/mechanism/epsilon-index.csv); the rows are written to
+    epsilon-index.csv beside the figure."""
+    if store is not None and not more_stores and not indexes:
+        avg = epsilon_table(sweep_dataset(store, {"epsilon", "theta"}, "the epsilon figure"))
+        return plot_epsilon(avg, out), epsilon_lines(avg)
+    stores = ([store] if store is not None else []) + list(more_stores)
+    frames = [epsilon_rows(sweep_dataset(s, {"theta"}, "the epsilon figure")) for s in stores]
+    for path in indexes:
+        if not Path(path).is_file():
+            raise SweepError(f"index CSV {str(path)!r} does not exist")
+        frame = pd.read_csv(path)
+        if "member_id" in frame:
+            frame = frame.drop(columns="member_id")
+        frames.append(frame)
+    if not frames:
+        raise SweepError("the epsilon figure needs a store (--store) or an index CSV (--index)")
+    rows = pd.concat(frames, ignore_index=True)
+    try:
+        avg = epsilon_frame_table(rows)
+    except ValueError as e:
+        raise SweepError(str(e)) from None
+    paths = plot_epsilon(avg, out)
+    paths.append(write_csv(rows.sort_values(["epsilon", "theta", "seed"]), Path(out) / "epsilon-index.csv"))
+    return paths, epsilon_lines(avg)
 
 
 def tester(runs: str | os.PathLike, store: str | os.PathLike | None = None,
