@@ -88,14 +88,15 @@ def test_every_preset_loads_and_issue_12s_presets_cover_what_it_asks():
     thetas = sorted(eps1.coords["theta"])
     assert len(thetas) >= 6 and thetas[0] == 0.05 and thetas[-1] == 1.0 and len(eps1.coords["seed"]) >= 2
     assert set(eps1.coords["eta_c"]) == {1e5, 1e6} and set(eps1.coords["v_d"]) == {1e-3, 3e-4}
-    tol = sweeps["eps1-tol"]
+    tol = sweeps["eps1-check"]
     assert sorted(tol.coords["step_tol"]) == [1e-3, 1e-2] and tol.base.epsilon == 1.0
     assert {m.config.step_tol for m in tol.members} == {1e-3, 1e-2}
+    assert {m.config.start for m in tol.members} == {"rest", "steady"}
     eps01 = sweeps["eps01"]
     assert eps01.base.epsilon == 0.1 and eps01.base.dt == 2e-9 < eps01.base.dt_unique_root_limit
     assert set(eps01.coords["integrator"]) == {"fixed", "adaptive"}
     for sw in (tol, eps01):  # the Fig. 6 corners
-        assert sorted(sw.coords["theta"]) == [0.05, 1.0] and set(sw.coords["eta_c"]) == {1e5, 1e6}
+        assert sorted(set(sw.coords["theta"])) == [0.05, 1.0] and set(sw.coords["eta_c"]) == {1e5, 1e6}
         assert set(sw.coords["v_d"]) == {1e-3, 3e-4} and len(sw.coords["seed"]) == 2
 
 
