@@ -59,6 +59,11 @@ CASES = {
     # issue 13: the 2-D chains and the slab (FFT loop) resume bit for bit too
     "chain2d": dict(N=8, Ly=6, geometry="chain2d", theta=0.5, t_total=2.5e-3, seed=2),
     "slab": dict(N=8, Ly=6, geometry="slab", theta=0.5, t_total=2.5e-3, seed=2),
+    # issue 12: the adaptive step (each sample starts at level 0), and the automatic length with
+    # min_cycles (epsilon = 1: chunks of 0.05 s, checks when the trace has grown by 2 %, here to t_max)
+    "adaptive": dict(N=31, theta=0.5, integrator="adaptive", dt=1e-7, t_total=2.5e-3, seed=2),
+    "adaptive, min_cycles": dict(N=31, theta=0.5, integrator="adaptive", dt=1e-7, epsilon=1.0, start="steady",
+                                 sem_target=0.03, t_max=0.3, min_cycles=3, output_interval=1e-3, seed=5),
 }
 SAVES = {"dead weight, automatic length": 60}
 
