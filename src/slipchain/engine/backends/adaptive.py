@@ -12,10 +12,11 @@ h = dt * 2**k, k = 0 ... ``Config.step_levels``:
   estimated from two consecutive steps as ``err = h/2 * max_i |a_i^n - a_i^(n-1)|`` over both
   chains' blocks, a_i^n = (u_i^(n+1) - u_i^n)/h (at creep ~0; at a slip event, or while fast modes
   ring, large).
-* **Control.** After each step: while err > tol (``step_tol * v_d``, m/s) the level drops by one
-  (the estimate falling by 4 per halving); if err < tol/8 the level rises by one. Steps are not
-  rejected: the step on which an event starts is taken at the coarse level (its fold at that
-  step's dt: the fold moves towards the maximum of f as dt grows), the next ones at the fine level.
+* **Control.** A step above level 0 with err > tol (``step_tol * v_d``, m/s) is rejected: the
+  state is still the step's start (the positions move only after acceptance; the contacts' solver
+  state is restored) and the step is taken again at the level where the estimate, falling by 4
+  per halving, meets tol. So a slip event starts on a fine step. After an accepted step with
+  err < tol/8 the level rises by one.
 * **Time grid.** A step of level k starts only where the base-step count within the output sample
   is a multiple of 2**k and ends within the sample: the samples (and the drive, v_d t with t the
   base-step count times dt) are those of the fixed step. Each sample starts at level 0 with no
@@ -33,7 +34,7 @@ import numba as nb
 import numpy as np
 
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, O_FD, O_XMEAN, O_XUMEAN, P_AMP, P_ETAC,
-                      P_KLY, P_KY, P_LAT, P_LY, P_ML, Y_FA, Y_FB)
+                      P_KLY, P_KY, P_LAT, P_LY, P_ML, Y_FA, Y_FB, Y_LOG, Y_P, Y_Q)
 from .cpu import _contacts, _explicit_forces, _explicit_forces_2d, _move, _refresh_solver, row_parameters
 
 STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step multiplies err by ~4)
@@ -53,17 +54,20 @@ def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
 
 
 @nb.njit(cache=True)
-def _error(n, ur, Ur, un, Un, aprev, h, have):
-    """h/2 max |a^n - a^(n-1)| over both chains (0 without a previous step); stores a^n in ``aprev``."""
+def _error(n, ur, Ur, un, Un, aprev, h):
+    """h/2 max |a^n - a^(n-1)| over both chains, a^n = (u^(n+1) - u^n)/h, a^(n-1) in ``aprev``."""
     err = 0.0
     for i in range(n):
-        a1 = (un[i] - ur[i]) / h
-        a2 = (Un[i] - Ur[i]) / h
-        if have:
-            err = max(err, abs(a1 - aprev[i]), abs(a2 - aprev[n + i]))
-        aprev[i] = a1
-        aprev[n + i] = a2
+        err = max(err, abs((un[i] - ur[i]) / h - aprev[i]), abs((Un[i] - Ur[i]) / h - aprev[n + i]))
     return 0.5 * h * err
+
+
+@nb.njit(cache=True)
+def _keep_acceleration(n, ur, Ur, un, Un, aprev, h):
+    """Store a^n = (u^(n+1) - u^n)/h of an accepted step in ``aprev``."""
+    for i in range(n):
+        aprev[i] = (un[i] - ur[i]) / h
+        aprev[n + i] = (Un[i] - Ur[i]) / h
 
 
 @nb.njit(cache=True)
@@ -71,8 +75,8 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
             out, acc, cacc, status):
     """:func:`slipchain.engine.backends.cpu.advance` with the adaptive step (module docstring).
 
-    Extra inputs: folds (B, L + 1, 2, C), the contacts' folds at dt*2**k; control (B, 3): tol [m/s],
-    the highest level, and (in/out) the count of steps taken. ``step`` counts base steps (dt), as with the fixed step.
+    Extra inputs: folds (B, L + 1, 2, C), the contacts' folds at dt*2**k; control (B, 4): tol [m/s],
+    the highest level, and (in/out) the counts of steps taken and of steps rejected. ``step`` counts base steps (dt), as with the fixed step.
     """
     nb_rows, n = x.shape
     cmax = sites.shape[1]
@@ -86,6 +90,7 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
     fk = np.empty(cmax)
     ok = np.empty(cmax, dtype=np.bool_)
     aprev = np.empty(2 * n)
+    ysave = np.empty((3, cmax))
     for row in range(nb_rows):
         if status[row] >= 0:
             continue
@@ -135,8 +140,24 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
                 else:
                     fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst,
                                             h / m, h / mL)
+                if level > 0:  # keep the contacts' solver state: the step may be rejected
+                    for k in range(nc):
+                        ysave[0, k] = ys[Y_LOG, k]
+                        ysave[1, k] = ys[Y_P, k]
+                        ysave[2, k] = ys[Y_Q, k]
                 _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m * (1.0 + h * etac), h * amp, c, 1.0 / h, True)
-                err = _error(n, ur, Ur, un, Un, aprev, h, have)
+                err = _error(n, ur, Ur, un, Un, aprev, h) if have else 0.0
+                if level > 0 and err > tol:  # rejected (a slip event starts): again from the same state, finer
+                    for k in range(nc):
+                        ys[Y_LOG, k] = ysave[0, k]
+                        ys[Y_P, k] = ysave[1, k]
+                        ys[Y_Q, k] = ysave[2, k]
+                    while level > 0 and err > tol:
+                        level -= 1
+                        err *= 0.25
+                    control[row, 3] += 1.0
+                    continue
+                _keep_acceleration(n, ur, Ur, un, Un, aprev, h)
                 w_contact -= _weighted_contact_sums(nc, fk, uk, ca, slow, w) * h
                 w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
                 w_drive += fsum * vd * h
@@ -144,13 +165,8 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
                 step[row] += w
                 j += w
                 control[row, 2] += 1.0
-                if have:
-                    if err > tol:
-                        while level > 0 and err > tol:
-                            level -= 1
-                            err *= 0.25
-                    elif err < STEP_UP * tol and level < top:
-                        level += 1
+                if have and err < STEP_UP * tol and level < top:
+                    level += 1
                 have = True
             xs = 0.0
             Xs = 0.0

@@ -25,8 +25,8 @@ class Batch:
     ``geometry`` and ``shape`` = (Lx, Ly) are the batch's (all rows share them); ``kernel`` holds
     a**2 k(q) on the rfft2 grid of each row, (B, Lx, Ly//2 + 1), for 'slab' and 'halfspace'.
     With integrator = 'adaptive' (all rows or none), ``folds`` (B, levels + 1, 2, C) holds each
-    contact's folds at dt * 2**k and ``step_control`` (B, 3) the tolerance in m/s (step_tol*v_d),
-    the number of doublings and a count of the steps taken (:mod:`.adaptive`).
+    contact's folds at dt * 2**k and ``step_control`` (B, 4) the tolerance in m/s (step_tol*v_d),
+    the number of doublings and counts of the steps taken and rejected (:mod:`.adaptive`).
     """
 
     x: np.ndarray
@@ -63,7 +63,7 @@ class Batch:
         ysolve = np.zeros((b, S.N_YS, cmax))
         levels = max(s.config.step_levels for s in systems) if adaptive else 0
         folds = np.zeros((b, levels + 1, 2, cmax)) if adaptive else None
-        step_control = np.zeros((b, 3)) if adaptive else None
+        step_control = np.zeros((b, 4)) if adaptive else None
         for r, s in enumerate(systems):
             params[r] = kernel_params(s)
             c = s.n_contacts
@@ -83,7 +83,7 @@ class Batch:
                     cf.m * (1.0 + cf.dt * cf.eta_c) * s.vstar, cf.dt * cf.epsilon * cf.f0, cf.c)
             if adaptive:
                 cf = s.config
-                step_control[r] = cf.step_tol * cf.v_d, cf.step_levels, 0.0
+                step_control[r] = cf.step_tol * cf.v_d, cf.step_levels, 0.0, 0.0
                 folds[r, :, 0], folds[r, :, 1] = np.inf, -np.inf
                 for k in range(cf.step_levels + 1):
                     h = cf.dt * 2.0**k
