@@ -21,13 +21,15 @@ from slipchain.sweeps.definition import member_id
 BASE = dict(N=31, theta=0.5, seed=3, t_total=1e-3, output_interval=1e-5, start="steady")
 
 
-def _steps(cfg: dict, n_samples: int) -> float:
-    """Advance a one-row batch by n_samples output samples; the steps taken per base step dt."""
+def _steps(cfg: dict, n_samples: int, rejected: bool = False) -> float | tuple[float, float]:
+    """Advance a one-row batch by n_samples output samples; the steps taken per base step dt (and
+    the steps rejected)."""
     system = build_system(make_config(**cfg))
     batch = Batch.pack([system], [initial_state(system)])
     CPUBackend().advance(batch, n_samples, system.config.sample_steps)
     assert batch.step[0] == n_samples * system.config.sample_steps
-    return float(batch.step_control[0, 2]) / batch.step[0]
+    taken = float(batch.step_control[0, 2]) / batch.step[0]
+    return (taken, float(batch.step_control[0, 3])) if rejected else taken
 
 
 def test_step_levels_stay_within_the_explicit_bounds():
@@ -47,7 +49,7 @@ def test_unreachable_tolerance_is_the_fold_integrator_bit_for_bit():
     b = sc.run(dict(cfg, integrator="adaptive", step_tol=1e-300))
     assert np.array_equal(a.f_d.values, b.f_d.values) and np.array_equal(a.x.values, b.x.values)
     assert a.attrs["W_contacts"] == b.attrs["W_contacts"]
-    assert _steps(dict(cfg, integrator="adaptive", step_tol=1e-300), 10) == 1.0
+    assert _steps(dict(cfg, integrator="adaptive", step_tol=1e-300), 10, rejected=True) == (1.0, 0.0)
 
 
 def test_adaptive_step_grows_and_agrees_with_the_fold_step_through_slip_events():
@@ -62,7 +64,8 @@ def test_adaptive_step_grows_and_agrees_with_the_fold_step_through_slip_events()
             / ref.max() for tol in (1e-2, 1e-4)}
     assert errs[1e-2] < 2.0 * fold and errs[1e-2] < 0.05, (errs, fold)
     assert errs[1e-4] <= errs[1e-2] * 1.5 + 1e-3, errs
-    assert _steps(dict(BASE, dt=1e-7, integrator="adaptive"), 100) < 0.6
+    taken, rejected = _steps(dict(BASE, dt=1e-7, integrator="adaptive"), 100, rejected=True)
+    assert taken < 0.6 and rejected > 0  # coarse steps between events, events started again on fine steps
 
 
 def test_physical_contact_stiffness_conserves_energy_and_follows_the_fold_step():
