@@ -66,12 +66,13 @@ def fig6_table(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, Any]]:
 def fig6_figure_data(ds: xr.Dataset) -> xr.Dataset:
     """What Fig. 6 draws: the seed-averaged table of :func:`fig6_table` (``mu``, ``err``, ``n``) with,
     in its attrs, v_d1 and v_d2, the dashed line f(v_d2, v0)/(epsilon f0) (NaN with one v_d), the
-    main chain length (0 if N is not swept), omega0 and the values at which other dimensions are held."""
+    main chain length (0 if N is not swept; n_base: the base config's), epsilon, omega0 and the values at
+    which other dimensions are held."""
     cfg = base_config(ds)
     avg, sel = fig6_table(ds)
     v_d1, v_d2 = drive_velocities(cfg, avg["v_d"].values)
     return avg.assign_attrs(v_d1=v_d1, v_d2=v_d2, dashed_line=dashed_line(cfg, v_d2) if v_d2 != v_d1 else float("nan"),
-                            n_main=main_n(avg) or 0, omega0=cfg.omega0,
+                            n_main=main_n(avg) or 0, n_base=cfg.N, epsilon=cfg.epsilon, omega0=cfg.omega0,
                             held=", ".join(f"{k} = {v:g}" for k, v in sel.items()))
 
 
@@ -114,7 +115,7 @@ def evaluate(ds: xr.Dataset) -> list[Claim]:
         claims.append(Claim(
             paper=f"At v_d2 = {v_d2:g} m/s friction is almost independent of load and lies near the dashed line "
                   f"f(v_d2, v0)/(epsilon f0) = {line:.4f}.",
-            measured=(f"{len(devs)} points (N = {n_main}): mu_star/line - 1 from {min(devs):+.2%} to {max(devs):+.2%} "
+            measured=(f"{len(devs)} points (N = {n_main if n_main is not None else cfg.N}): mu_star/line - 1 from {min(devs):+.2%} to {max(devs):+.2%} "
                       f"(mean {mean_dev:+.2%}); mu_star(theta_max)/mu_star(theta_min): {ratio_text}.") if devs else "no data",
             criterion=f"every mu_star within {V_D2_TOLERANCE:.0%} of the dashed line",
             passed=bool(devs) and abs(worst) <= V_D2_TOLERANCE,

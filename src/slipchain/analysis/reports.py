@@ -95,11 +95,11 @@ def _table(ds: xr.Dataset) -> list[str]:
     avg, sel = fig6_table(ds)
     extra = ", ".join(f"{k} = {v:g}" for k, v in sel.items())
     lines = [f"At {extra}." if extra else "", ""] if extra else []
-    ns = avg["N"].values.tolist() if "N" in avg.dims else [None]
+    ns = avg["N"].values.tolist() if "N" in avg.dims else [base_config(ds).N]  # N held: the base's
     header = "| N | v_d | theta | " + " | ".join(f"eta_c = {eta_label(ec)}" for ec in avg["eta_c"].values) + " |"
     lines += [header, "|---" * (3 + avg.sizes["eta_c"]) + "|"]
     for n in ns:
-        sub_n = avg.sel(N=n) if n is not None else avg
+        sub_n = avg.sel(N=n) if "N" in avg.dims else avg
         for vd in sorted(sub_n["v_d"].values.tolist(), reverse=True):
             for th in sub_n["theta"].values:
                 cells = []

@@ -172,7 +172,7 @@ def plot_epsilon(avg: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     """mu_star versus theta for each epsilon (the contact-force scale of eq. 1), from
     :func:`slipchain.analysis.statistics.epsilon_table`."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    fig, ax = plt.subplots(figsize=(8.4, 4.4))
     colors = plt.cm.plasma(np.linspace(0, 0.8, avg.sizes["epsilon"]))
     for eps, color in zip(avg["epsilon"].values, colors):
         cur = avg.sel(epsilon=eps).dropna("theta", subset=["mu"])
@@ -181,7 +181,7 @@ def plot_epsilon(avg: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     ax.set_xlabel(r"$\theta$")
     ax.set_ylabel(r"$\mu^*$")
     ax.set_title(r"The load effect for several $\varepsilon$ ($v_d = v_0$)", fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)  # clear of the curves
     return save_figure(fig, out, "epsilon")
 
 

@@ -85,8 +85,12 @@ def plot_fig6(data: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     ax.set_xlabel(r"$\theta$ (proportional to the load)")
     ax.set_ylabel(r"$\mu^* = \langle f_d \rangle / (\varepsilon f_0 \theta)$")
     ax.set_xlim(0, 1.05)
-    n_text = f"N = {n_main}" if n_main is not None else ""
-    ax.set_title("Fig. 6: friction versus load" + (f" ({', '.join(x for x in (n_text, avg.attrs['held']) if x)})"),
+    n_base = avg.attrs.get("n_base")
+    n_text = f"N = {n_main}" if n_main is not None else (f"N = {n_base}" if n_base else "")
+    eps = avg.attrs.get("epsilon", 1e-2)
+    eps_text = rf"$\varepsilon$ = {eps:g}" if eps != 1e-2 else ""  # the paper's value goes unsaid
+    parts = [x for x in (n_text, avg.attrs["held"], eps_text) if x]
+    ax.set_title("Fig. 6: friction versus load" + (f" ({', '.join(parts)})" if parts else ""),
                  fontsize=10)
     ax.legend(handles=handles, fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
     return save_figure(fig, out, "fig6")
