@@ -22,7 +22,7 @@ import xarray as xr
 from ..model.config import Config, make_config
 from ..model.system import build_system
 from ..results.schema import Status
-from .statistics import base_config, drive_velocities, load_drops, main_average, main_n, main_selection
+from .statistics import base_config, drive_velocities, fmt_value, load_drops, main_average, main_n, main_selection
 
 V_D2_TOLERANCE = 0.03  # issue acceptance: every mu_star within 3 % of the dashed line at v_d2
 DROP_RATIO_MAX = 0.8  # issue acceptance: mu_star(theta=1) <= 0.8 mu_star(theta_min) at v_d1, eta_c = 0.1 omega0
@@ -73,7 +73,7 @@ def fig6_figure_data(ds: xr.Dataset) -> xr.Dataset:
     v_d1, v_d2 = drive_velocities(cfg, avg["v_d"].values)
     return avg.assign_attrs(v_d1=v_d1, v_d2=v_d2, dashed_line=dashed_line(cfg, v_d2) if v_d2 != v_d1 else float("nan"),
                             n_main=main_n(avg) or 0, n_base=cfg.N, epsilon=cfg.epsilon, omega0=cfg.omega0,
-                            held=", ".join(f"{k} = {v:g}" for k, v in sel.items()))
+                            held=", ".join(f"{k} = {fmt_value(v)}" for k, v in sel.items()))
 
 
 @dataclass

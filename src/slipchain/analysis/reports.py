@@ -15,7 +15,7 @@ from ..results.observables import SLOW_FRACTION
 from ..results.schema import Status
 from .fig6 import Claim, eta_label, fig6_table
 from .mechanism import STICK_FRACTION, median_frequency, stick_slip_average
-from .statistics import base_config, load_drops
+from .statistics import base_config, fmt_value, load_drops
 
 
 def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, Any]], *, command: str,
@@ -58,13 +58,13 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
         for r in conv:
             groups.setdefault((r["dim"], r["main"], r["alt"], r["v_d"]), []).append(r)
         for (d, m, a, vd), rs in groups.items():
-            lines.append(f"| {d} (v_d = {vd:g}) | {m:g} -> {a:g} | {len(rs)} | {np.mean([r['diff'] for r in rs]):+.4f} | "
+            lines.append(f"| {d} (v_d = {vd:g}) | {fmt_value(m)} -> {fmt_value(a)} | {len(rs)} | {np.mean([r['diff'] for r in rs]):+.4f} | "
                          f"{max(abs(r['z']) for r in rs):.2f} |")
     not_done = list(zip(*np.nonzero(((ds["status"] != Status.COMPLETED) & (ds["status"] != Status.ABSENT)).values)))
     if not_done:
         lines += ["", "## Members not completed", ""]
         for idx in not_done:
-            point = ", ".join(f"{d} = {ds[d].values[i].item():g}" for d, i in zip(ds["status"].dims, idx))
+            point = ", ".join(f"{d} = {fmt_value(ds[d].values[i].item())}" for d, i in zip(ds["status"].dims, idx))
             lines.append(f"- {point}: {ds['status'].values[idx]}. {ds['message'].values[idx]}")
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
@@ -93,7 +93,7 @@ def _versions(ds: xr.Dataset) -> str:
 
 def _table(ds: xr.Dataset) -> list[str]:
     avg, sel = fig6_table(ds)
-    extra = ", ".join(f"{k} = {v:g}" for k, v in sel.items())
+    extra = ", ".join(f"{k} = {fmt_value(v)}" for k, v in sel.items())
     lines = [f"At {extra}." if extra else "", ""] if extra else []
     ns = avg["N"].values.tolist() if "N" in avg.dims else [base_config(ds).N]  # N held: the base's
     header = "| N | v_d | theta | " + " | ".join(f"eta_c = {eta_label(ec)}" for ec in avg["eta_c"].values) + " |"

@@ -27,6 +27,11 @@ FIG6_DIMS = ("N", "theta", "eta_c", "v_d", "seed")  # the dimensions of Fig. 6; 
 MAIN_N = 301
 
 
+def fmt_value(v: Any) -> str:
+    """A swept value for reports: numbers in %g, anything else (``start``, ``integrator``) as it is."""
+    return f"{v:g}" if isinstance(v, (int, float, np.number)) and not isinstance(v, bool) else str(v)
+
+
 def base_config(ds: xr.Dataset) -> Config:
     """The sweep's base config, from the definition stored in the Dataset's attrs."""
     return make_sweep(tomllib.loads(ds.attrs["definition"]), legacy=True).base
@@ -161,6 +166,6 @@ def load_drops(avg: xr.Dataset, dim: str) -> list[dict[str, float]]:
     return rows
 
 
-__all__ = ["EPSILON_COLUMNS", "FIG6_DIMS", "MAIN_N", "base_config", "drive_velocities", "epsilon_frame_table",
+__all__ = ["EPSILON_COLUMNS", "FIG6_DIMS", "MAIN_N", "base_config", "drive_velocities", "epsilon_frame_table", "fmt_value",
            "epsilon_rows", "epsilon_table", "load_drops", "main_average", "main_n",
            "main_selection", "ratio", "ratios_to_first", "seed_average"]
