@@ -95,7 +95,9 @@ def test_every_preset_loads_and_issue_12s_presets_cover_what_it_asks():
     eps01 = sweeps["eps01"]
     assert eps01.base.epsilon == 0.1 and eps01.base.dt == 2e-9 < eps01.base.dt_unique_root_limit
     assert set(eps01.coords["integrator"]) == {"fixed", "adaptive"}
-    for sw in (tol, eps01):  # the Fig. 6 corners
+    ada = sweeps["adaptive"]
+    assert ada.base.epsilon == 1e-2 and ada.base.dt == 1e-8 and set(ada.coords["integrator"]) == {"fixed", "adaptive"}
+    for sw in (tol, eps01, ada):  # the Fig. 6 corners
         assert sorted(set(sw.coords["theta"])) == [0.05, 1.0] and set(sw.coords["eta_c"]) == {1e5, 1e6}
         assert set(sw.coords["v_d"]) == {1e-3, 3e-4} and len(sw.coords["seed"]) == 2
 

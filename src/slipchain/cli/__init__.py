@@ -2,7 +2,7 @@
 
 * ``slipchain run [CONFIG.toml] [--set name=value ...] [--out FILE.nc] [--json] [--backend cpu|gpu|auto]``: one run.
 * ``slipchain sweep SWEEP.toml --store PATH [--scheduler ADDRESS] [--workers N] [--backend ...]``: a sweep on Dask.
-* ``slipchain reproduce [--preset quick|paper|fold|eps1|eps1-check|eps01] [--store PATH] [--out DIR]``: the main job.
+* ``slipchain reproduce [--preset quick|paper|fold|eps1|eps1-check|eps01|adaptive] [--store PATH] [--out DIR]``: the main job.
 * ``slipchain mechanism --store PATH``; ``slipchain figure fig5|fig6|mechanism|velocity|epsilon|dead-weight|tester``;
   ``slipchain tester analyze|synth``.
 

@@ -96,7 +96,7 @@ def print_sweep_report(report: SweepReport, console: Console | None = None) -> N
 
 
 def reproduce(
-    preset: Annotated[Preset, typer.Option("--preset", help="quick (60 runs), paper (Fig. 6 in full), fold (the fold integrator's convergence table), eps1 (Fig. 6 at epsilon = 1), eps1-check and eps01 (its convergence checks).")] = Preset.QUICK,
+    preset: Annotated[Preset, typer.Option("--preset", help="quick (60 runs), paper (Fig. 6 in full), fold (the fold integrator's convergence table), eps1 (Fig. 6 at epsilon = 1), eps1-check, eps01 and adaptive (its convergence checks).")] = Preset.QUICK,
     store: Annotated[Optional[Path], typer.Option("--store", help="Store directory (default results/fig6-PRESET/store).")] = None,
     out_dir: Annotated[Optional[Path], typer.Option("--out", help="Figures and report (default results/fig6-PRESET).")] = None,
     scheduler: SchedulerOpt = None,

@@ -232,8 +232,9 @@ class Preset(StrEnum):
     """The shipped Fig. 6 sweeps: ``quick`` (60 runs, minutes), ``paper`` (368 runs, Fig. 6 in full) and
     ``fold`` (the Fig. 6 corners with integrator = 'fold' at three dt: issue 12's convergence table) and
     ``eps1`` (Fig. 6 at the physical contact stiffness, epsilon = 1, with integrator = 'adaptive': issue 12),
-    ``eps1-check`` (its corners at the adaptive step's tolerance and at one ten times tighter; rest against steady start) and ``eps01``
-    (the corners at epsilon = 0.1, the adaptive step against the fixed step at dt = 2e-9)."""
+    ``eps1-check`` (its corners at the adaptive step's tolerance and at one ten times tighter; rest against steady start),
+    ``eps01`` (the corners at epsilon = 0.1, the adaptive step against the fixed step at dt = 2e-9) and ``adaptive``
+    (the corners at epsilon = 1e-2, the adaptive step against the fixed step at dt = 1e-8)."""
 
     QUICK = "quick"
     PAPER = "paper"
@@ -241,13 +242,14 @@ class Preset(StrEnum):
     EPS1 = "eps1"
     EPS1_CHECK = "eps1-check"
     EPS01 = "eps01"
+    ADAPTIVE = "adaptive"
 
 
 PRESETS = tuple(p.value for p in Preset)
 
 
 def preset_path(name: str | Preset) -> Path:
-    """Path of a shipped Fig. 6 preset (``quick``, ``paper``, ``fold``, ``eps1``, ``eps1-check``, ``eps01``)."""
+    """Path of a shipped Fig. 6 preset (``quick``, ``paper``, ``fold``, ``eps1``, ``eps1-check``, ``eps01``, ``adaptive``)."""
     if name not in PRESETS:
         raise SweepError(f"preset {name!r} is unknown; expected one of {', '.join(PRESETS)}")
     return Path(str(resources.files("slipchain") / "presets" / f"fig6-{Preset(name).value}.toml"))
