@@ -31,11 +31,15 @@ MIN_STEADY_SLIDE = 1e-6  # ...and a steady window in which the drive has moved a
 # at very low v_d a steady start can look converged (tiny SE, no drift) long before it has settled
 
 
+def chunk_time(cfg) -> float:
+    """Simulated seconds per compiled chunk: CHUNK_TIME, or LONG_CHUNK_TIME with ``min_cycles`` (runs
+    of tens of seconds: the per-contact sums are kept per chunk, and the checkpoint holds them)."""
+    return LONG_CHUNK_TIME if cfg.min_cycles else CHUNK_TIME
+
+
 def chunk_samples(cfg, interval: float) -> int:
-    """Output samples per compiled chunk: CHUNK_TIME of simulated time, LONG_CHUNK_TIME with
-    ``min_cycles`` (runs of tens of seconds: the per-contact sums are kept per chunk, and the
-    checkpoint holds them); at least one sample."""
-    return max(1, int(round((LONG_CHUNK_TIME if cfg.min_cycles else CHUNK_TIME) / interval)))
+    """Output samples per compiled chunk (:func:`chunk_time`), at least one."""
+    return max(1, int(round(chunk_time(cfg) / interval)))
 
 
 def geometric_check_index(n: int, n_first: int) -> int:
@@ -57,9 +61,10 @@ class UntilConverged:
     With ``min_cycles`` > 0 (issue 12: the long slip cycles at epsilon = 1) the steady window must
     also hold that many cycles of f_d (:func:`~slipchain.results.observables.count_cycles`: for
     system-wide stick-slip, slip events; the batch-means SE of a window of a few cycles is not to be
-    trusted) unless its standard deviation is below ``sem_target`` (steady sliding), and the conditions are checked each time the trace has grown by DECIDE_EVERY (runs of
-    10**5 samples and more: checking every chunk would cost more than the run). Without it the
-    checks run after every chunk, as before.
+    trusted) unless its standard deviation is below ``sem_target`` (steady sliding), and the
+    conditions are checked each time the trace has grown by DECIDE_EVERY (runs of 10**5 samples and
+    more: checking every chunk would cost more than the run). Without it the checks run after
+    every chunk, as before.
     """
 
     system: System
@@ -217,5 +222,5 @@ def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     )
 
 
-__all__ = ["CHUNK_TIME", "LONG_CHUNK_TIME", "chunk_samples", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
+__all__ = ["CHUNK_TIME", "LONG_CHUNK_TIME", "chunk_samples", "chunk_time", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
            "row_control"]

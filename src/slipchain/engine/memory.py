@@ -33,7 +33,7 @@ from typing import Iterable
 
 from ..model.config import Config, ConfigError
 from . import scheme as S
-from .control import CHUNK_TIME, LONG_CHUNK_TIME
+from .control import CHUNK_TIME, chunk_time
 
 BYTES_PER_BLOCK = 128
 BYTES_PER_CONTACT = 176
@@ -60,7 +60,7 @@ BYTES_PER_BLOCK_FFT = 64
 def estimate_bytes(cfg: Config) -> int:
     """Bytes that one realisation of ``cfg`` holds at its peak, beyond the interpreter (see the module docstring)."""
     t = simulated_length(cfg)
-    chunks = int(t / max(LONG_CHUNK_TIME if cfg.min_cycles else CHUNK_TIME, cfg.output_interval)) + 1
+    chunks = int(t / max(chunk_time(cfg), cfg.output_interval)) + 1
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
     per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if cfg.geometry in ("slab", "halfspace") else 0)

@@ -76,7 +76,8 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
     """:func:`slipchain.engine.backends.cpu.advance` with the adaptive step (module docstring).
 
     Extra inputs: folds (B, L + 1, 2, C), the contacts' folds at dt*2**k; control (B, 4): tol [m/s],
-    the highest level, and (in/out) the counts of steps taken and of steps rejected. ``step`` counts base steps (dt), as with the fixed step.
+    the highest level, and (in/out) the counts of steps taken and of steps rejected. ``step`` counts
+    base steps (dt), as with the fixed step.
     """
     nb_rows, n = x.shape
     cmax = sites.shape[1]
