@@ -33,16 +33,18 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, O_FD, O_XMEAN, O_XUMEAN, P_AMP, P_ETAC,
-                      P_KLY, P_KY, P_LAT, P_LY, P_ML, Y_FA, Y_FB, Y_LOG, Y_P, Y_Q)
-from .cpu import _contacts, _explicit_forces, _explicit_forces_2d, _move, _refresh_solver, row_parameters
+from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, P_AMP, P_ETAC, P_KLY, P_KY, P_LAT, P_LY,
+                      P_ML, Y_FA, Y_FB, Y_LOG, Y_P, Y_Q)
+from .cpu import _contacts, _end_sample, _explicit_step, _move, _refresh_solver, row_parameters
 
 STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step multiplies err by ~4)
 
 
 @nb.njit(cache=True)
 def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
-    """Per-contact sums as the fixed step's, each step counted ``w`` times (its base steps); returns sum f*u."""
+    """Per-contact sums as :func:`.cpu._contact_sums`, each step counted ``w`` times (its base steps);
+    returns sum f*u. Kept apart: that one is compiled with fastmath (sums contracted to FMA), which
+    with w != 1 would change this kernel's sums in their last bits."""
     p = 0.0
     for k in range(nc):
         ca[C_F, k] += w * fk[k]
@@ -135,12 +137,8 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
                 w = 1 << level
                 h = dt0 * w
                 drive = vd * (step[row] * dt0)
-                if lattice:
-                    fsum = _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
-                                               drive, fconst, h / m, h / mL)
-                else:
-                    fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst,
-                                            h / m, h / mL)
+                fsum = _explicit_step(lattice, ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
+                                      drive, fconst, h / m, h / mL)
                 if level > 0:  # keep the contacts' solver state: the step may be rejected
                     for k in range(nc):
                         ysave[0, k] = ys[Y_LOG, k]
@@ -169,15 +167,7 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
                 if have and err < STEP_UP * tol and level < top:
                     level += 1
                 have = True
-            xs = 0.0
-            Xs = 0.0
-            for i in range(n):
-                xs += xr[i]
-                Xs += Xr[i]
-            out[row, s, O_FD] += fd_sum / sample_steps
-            out[row, s, O_XMEAN] += xs / n
-            out[row, s, O_XUMEAN] += Xs / n
-            if not (np.isfinite(fd_sum) and np.isfinite(xs) and np.isfinite(w_contact)):
+            if not _end_sample(xr, Xr, fd_sum, sample_steps, w_contact, out[row, s]):
                 status[row] = step[row]
                 break
         acc[row, A_WDRIVE] += w_drive

@@ -159,6 +159,33 @@ def _contact_sums(nc, fk, uk, ca, slow):
 
 
 @nb.njit(cache=True)
+def _explicit_step(lattice, ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive, fconst,
+                   dtm, dtmL):
+    """Steps 1-2 of the scheme for one row: :func:`_explicit_forces_2d` on the lattice of 'chain2d',
+    else :func:`_explicit_forces`; returns the sum of drive forces."""
+    if lattice:
+        return _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive,
+                                   fconst, dtm, dtmL)
+    return _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL)
+
+
+@nb.njit(cache=True)
+def _end_sample(xr, Xr, fd_sum, sample_steps, w_contact, out_s):
+    """Write one sample's outputs (mean f_d, and mean x and X at its end) into ``out_s`` (N_OUT,);
+    returns False if a non-finite value appeared (the row then stops)."""
+    n = xr.size
+    xs = 0.0
+    Xs = 0.0
+    for i in range(n):
+        xs += xr[i]
+        Xs += Xr[i]
+    out_s[O_FD] += fd_sum / sample_steps
+    out_s[O_XMEAN] += xs / n
+    out_s[O_XUMEAN] += Xs / n
+    return math.isfinite(fd_sum) and math.isfinite(xs) and math.isfinite(w_contact)
+
+
+@nb.njit(cache=True)
 def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_samples, sample_steps,
             out, acc, cacc, status):
     """Advance every row b of the batch by n_samples*sample_steps steps (scheme: module docstring).
@@ -208,27 +235,15 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_sample
             fd_sum = 0.0
             for _ in range(sample_steps):
                 drive = vd * (step[row] * dt)
-                if lattice:
-                    fsum = _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
-                                               drive, fconst, dtm, dtmL)
-                else:
-                    fsum = _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst,
-                                            dtm, dtmL)
+                fsum = _explicit_step(lattice, ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
+                                      drive, fconst, dtm, dtmL)
                 _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt, fold)
                 w_contact -= _contact_sums(nc, fk, uk, ca, slow) * dt
                 w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
                 w_drive += fsum * vd * dt
                 fd_sum += fsum / n
                 step[row] += 1
-            xs = 0.0
-            Xs = 0.0
-            for i in range(n):
-                xs += xr[i]
-                Xs += Xr[i]
-            out[row, s, O_FD] += fd_sum / sample_steps
-            out[row, s, O_XMEAN] += xs / n
-            out[row, s, O_XUMEAN] += Xs / n
-            if not (math.isfinite(fd_sum) and math.isfinite(xs) and math.isfinite(w_contact)):
+            if not _end_sample(xr, Xr, fd_sum, sample_steps, w_contact, out[row, s]):
                 status[row] = step[row]
                 break
         acc[row, A_WDRIVE] += w_drive
