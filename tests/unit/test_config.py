@@ -17,7 +17,12 @@ def test_defaults_are_the_papers_values():
     assert c.f0 == pytest.approx(0.065) and c.omega0 == pytest.approx(1e6)
     assert c.eta == pytest.approx(0.3 * c.omega0) and c.n_contacts == 301
     # MODEL.md: the unique-root limit is about 3e-8 s for the defaults.
-    assert 2e-8 < c.dt_unique_root_limit < 4e-8 and c.dt < c.dt_unique_root_limit
+    assert 2e-8 < c.dt_unique_root_limit < 4e-8
+    # issue 26: the adaptive step by default, from dt = 1e-7 s (doubling twice, below 0.9 of the
+    # stable step 6.9e-7 s); the fixed step's default is the paper's 2e-8 s, below the limit
+    assert (c.integrator, c.dt, c.step_levels, c.dt_is_default) == ("adaptive", 1e-7, 2, True)
+    f = make_config(integrator="fixed")
+    assert f.dt == 2e-8 and f.dt < f.dt_unique_root_limit
 
 
 BAD = [
@@ -32,7 +37,7 @@ BAD = [
     ({"v_d": 0.0}, "v_d", "> 0"),
     ({"v0": -1.0}, "v0", "> 0"),
     ({"dt": 0.0}, "dt", "> 0"),
-    ({"dt": 1e-7}, "dt", "several roots"),
+    ({"dt": 1e-7, "integrator": "fixed"}, "dt", "several roots"),
     ({"nu": -1.0}, "nu", "(-1, 0.5]"),
     ({"nu": 0.6}, "nu", "(-1, 0.5]"),
     ({"theta": "half"}, "theta", "number"),
@@ -117,7 +122,17 @@ def test_backend_is_not_a_config_key_but_old_files_with_it_still_load(tmp_path):
 
     index = Path(__file__).resolve().parents[2] / "docs" / "fig6-paper" / "index.csv"
     frozen = {row["member_id"] for row in csv.DictReader(index.open())}
-    assert {member_id(m.config) for m in load_preset("paper").members} == frozen and len(frozen) == 368
+    # issue 26: the default is now the adaptive step; a store written before (its sweep.toml without
+    # the integrator key) still means the fixed step and resumes with the ids it wrote
+    old = tmp_path / "old-store"
+    old.mkdir()
+    (old / "sweep.toml").write_text((Path(__file__).parents[1] / "data" / "fig6-paper-before-26.toml").read_text())
+    (old / "members").mkdir()
+    (old / "failed").mkdir()
+    stored = Store.open(old).sweep
+    assert {m.id for m in stored.members} == frozen and len(frozen) == 368
+    assert {m.config.integrator for m in stored.members} == {"fixed"}
+    assert not frozen & {m.id for m in load_preset("paper").members}  # today's preset: other members
 
 
 @pytest.mark.parametrize("delta", [309.0, 312.0, 1e300])
@@ -127,4 +142,4 @@ def test_delta_beyond_the_float_range_is_refused_by_name(delta):
     with pytest.raises(ConfigError, match=r"config key 'delta' has value .*v0\*10\*\*-delta"):
         make_config(delta=delta)
     with pytest.raises(ConfigError, match="config key 'dt'"):  # ordinary floats: past the delta check, then dt's
-        make_config(delta=100.0)
+        make_config(delta=100.0, integrator="fixed", dt=2e-8)

@@ -78,7 +78,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
             raise ValueError("a batch needs equal N, dt, output_interval and min_cycles > 0 or not; got "
                              f"{(c.N, c.dt, c.output_interval, c.min_cycles)} and {(cfg0.N, cfg0.dt, cfg0.output_interval, cfg0.min_cycles)}")
     check_memory([s.config for s in systems])  # MemoryEstimateError before the batch is allocated
-    engine = get_backend(backend)
+    engine = get_backend(backend, [s.config for s in systems])
     states0 = [initial_state(s) if states is None or states[i] is None else states[i].copy()
                for i, s in enumerate(systems)]
     batch = Batch.pack(systems, states0)

@@ -12,7 +12,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, Literal, Mapping, Sequence
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
 
 from .contact_law import ContactLaw
 
@@ -26,8 +26,8 @@ ALLOWED: dict[str, str] = {
     "N": "an integer >= 3 (blocks per chain; blocks along the sliding direction x, Lx, in 2-D)",
     "Ly": "an integer >= 1 (blocks across the sliding direction, y; 1 for the chain)",
     "geometry": "one of 'chain', 'chain2d', 'slab', 'halfspace'",
-    "integrator": "one of 'fixed' (dt below the unique-root limit), 'fold' (fold-aware contacts, issue 12), "
-                  "'adaptive' (fold-aware contacts and a step that doubles up to the explicit limit)",
+    "integrator": "one of 'adaptive' (the default: fold-aware contacts and a step that doubles up to the stable "
+                  "step), 'fixed' (dt below the unique-root limit), 'fold' (fold-aware contacts, issue 12)",
     "step_tol": "a number > 0 (integrator = 'adaptive': largest local velocity error per step, in units of v_d)",
     "min_cycles": "an integer >= 0 (automatic length: slip cycles the steady window must hold; 0 for none)",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
@@ -41,7 +41,7 @@ ALLOWED: dict[str, str] = {
     "v_d": "a number > 0 (m/s)",
     "start": "one of 'rest', 'steady'",
     "dead_weight": "a number > 0 (applied force per block in units of epsilon*f0*theta), or absent for the spring drive",
-    "dt": "a number > 0 (s)",
+    "dt": "a number > 0 (s), or absent for the default of the integrator (Config.default_dt)",
     "t_total": "a number > 0 (s), or absent for an automatic run length",
     "t_max": "a number > 0 (s)",
     "t_decide": "a number > 0 (s), less than t_max, only with dead_weight and without t_total; or absent",
@@ -60,13 +60,17 @@ LEGACY_KEYS: dict[str, str] = {
 }
 
 
-# Keys added after 0.2 with a value that means "as before" (the chain): left out of the TOML text and
-# of sweep member ids while at it, so stored runs and stores stay valid.
+# Keys added after 0.2, with the value that their absence meant before they existed: left out of sweep
+# member ids at that value (so stores written before stay valid), filled in where a stored config
+# (legacy=True) lacks them, and left out of the TOML text while that is also today's default.
+# integrator: 'fixed' was the default until issue 26 made it 'adaptive'; a stored config or store
+# without the key ran with the fixed step and keeps that meaning.
 OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0}
 _NOT_OFF = object()
 
-# The explicit 2-D steps keep dt*omega_max below this fraction of symplectic Euler's limit 2.
+# The adaptive step's largest step stays below this fraction of the stable step (Config.dt_stable).
 STABLE_FRACTION = 0.9
+DEFAULT_DT_LEVELS = 2  # dt absent: the base step lies at least 2**2 below the adaptive step's ceiling
 MAX_STEP_LEVELS = 6  # integrator = 'adaptive': the step doubles at most this often (dt ... 64 dt)
 
 
@@ -127,11 +131,11 @@ class Config(BaseModel):
     dead_weight: float | None = Field(None, gt=0)
     geometry: Literal["chain", "chain2d", "slab", "halfspace"] = "chain"
     Ly: int = Field(1, ge=1)
-    integrator: Literal["fixed", "fold", "adaptive"] = "fixed"
+    integrator: Literal["fixed", "fold", "adaptive"] = "adaptive"
     step_tol: float = Field(0.01, gt=0)
     min_cycles: int = Field(0, ge=0)
 
-    dt: float = Field(2e-8, gt=0)
+    dt: float = Field(2e-8, gt=0)  # absent from the input: Config.default_dt (the 2e-8 is never used)
     t_total: float | None = Field(None, gt=0)
     t_max: float = Field(0.25, gt=0)
     t_decide: float | None = Field(None, gt=0)
@@ -139,6 +143,26 @@ class Config(BaseModel):
     sem_target: float = Field(0.01, gt=0)
     output_interval: float = Field(1e-5, gt=0)
     seed: int = Field(0, ge=0)
+
+    _dt_auto: bool = PrivateAttr(default=False)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal values, equal configs (whether dt was given or chosen by default does not matter)."""
+        return isinstance(other, Config) and self.model_dump() == other.model_dump()
+
+    def __hash__(self) -> int:
+        return hash(tuple(self.model_dump().items()))
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _default_step(cls, data: Any, handler: Any) -> "Config":
+        """dt absent (or None): :attr:`default_dt` of the config with every other value as given."""
+        if not isinstance(data, Mapping) or data.get("dt") is not None:
+            return handler(data)
+        probe = handler({**data, "dt": 1e-15})  # every check but the step's; dt only sets the step
+        cfg = handler({**data, "dt": probe.default_dt})
+        cfg._dt_auto = True
+        return cfg
 
     @model_validator(mode="after")
     def _check_combinations(self) -> "Config":
@@ -185,11 +209,8 @@ class Config(BaseModel):
         if self.min_cycles and (self.t_total is not None or self.dead_weight is not None):
             raise ValueError(_message("min_cycles", self.min_cycles, "0 (absent) with t_total or dead_weight: it is a "
                                       "condition of the spring drive's automatic run length"))
-        if self.integrator == "adaptive" and self.geometry not in ("chain", "chain2d"):
-            raise ValueError(_message("integrator", self.integrator, f"'fixed' or 'fold' with geometry = "
-                                      f"'{self.geometry}' (the adaptive step runs the chains only, so far)"))
+        self._check_stable_step()
         if self.integrator in ("fold", "adaptive"):
-            self._check_fold_step()
             return self
         dt_max = self.dt_unique_root_limit
         if self.dt >= dt_max:
@@ -200,58 +221,71 @@ class Config(BaseModel):
                     f"dt < {dt_max:.3g} s: above it the per-contact implicit equation "
                     "m*u + dt*f(u) = r has several roots on the weakening branch of the slowest "
                     "contact (v* = v0*10**-delta) and the dynamics are not those of the model; "
-                    "integrator = 'fold' keeps each contact on its branch and allows larger dt",
+                    "integrator = 'adaptive' (the default) or 'fold' keep each contact on its branch and allow "
+                    f"dt up to the stable step, {self.dt_stable:.3g} s",
                 )
             )
         return self
 
     def _check_geometry(self) -> None:
-        """The 2-D geometries (issue 13): Ly only off the chain, no dead weight on the continuum
-        yet, and the explicit step stable (:meth:`_check_explicit_step`)."""
+        """The 2-D geometries (issue 13): Ly only off the chain, no dead weight on the continuum yet."""
         if self.geometry == "chain":
             if self.Ly != 1:
                 raise ValueError(_message("Ly", self.Ly, "1 with geometry = 'chain' (a 2-D interface is geometry = "
                                           "'chain2d', 'slab' or 'halfspace')"))
             return
-        if self.geometry in ("slab", "halfspace") and self.dead_weight is not None:
-            raise ValueError(_message("dead_weight", self.dead_weight, f"absent with geometry = '{self.geometry}' "
-                                      "(the dead-weight drive is built for the chains only, so far)"))
-        self._check_explicit_step(f"for geometry = '{self.geometry}'")
+        from .capabilities import config_refusal
 
-    def _check_fold_step(self) -> None:
-        """integrator = 'fold' or 'adaptive' (issue 12): the contact equation may have several roots (the solver
-        picks the branch), so dt is bounded by the explicit part alone: the springs,
-        dt*omega_max < 1.8, and the explicit pair damping, dt*2z*eta < 1.8 (z neighbours and the
-        other layer: 6 for the chain, 10 for chain2d)."""
-        if self.geometry == "chain":  # (the 2-D geometries checked omega_max already)
-            self._check_explicit_step(f"with integrator = '{self.integrator}'")
-        rate = self._damping_rate
-        if rate > 0 and not self.dt * rate < 2.0 * STABLE_FRACTION:
-            raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / rate:.3g} s with integrator = "
-                                      f"'{self.integrator}': the explicit pair damping needs dt*(2 z eta) < "
-                                      f"{2.0 * STABLE_FRACTION:g} (z neighbours and the other layer)"))
+        why = config_refusal(self, "cpu")  # the capability table: what does not run anywhere
+        if why is not None:
+            key = "dead_weight" if self.dead_weight is not None else "integrator"
+            raise ValueError(_message(key, getattr(self, key), f"a combination that runs: {why}"))
 
     @property
-    def _damping_rate(self) -> float:
-        """2 z eta of the explicit pair damping (z neighbours and the other layer), 0 off the chains."""
-        return {"chain": 6.0, "chain2d": 10.0}.get(self.geometry, 0.0) * self.eta
+    def dt_stable(self) -> float:
+        """The largest stable step [s] of the explicit springs and damping together, from the scheme's
+        linear analysis per Fourier mode (:func:`slipchain.model.stability.stable_step`; issue 26).
+        Every integrator's dt must be below it; the adaptive step's largest level stays below
+        STABLE_FRACTION of it."""
+        from .stability import stable_step
+
+        return stable_step(self)
+
+    @property
+    def default_dt(self) -> float:
+        """The base step used when dt is not given [s]: the largest value of the 1-2-5 series at most
+        STABLE_FRACTION * dt_stable / 2**DEFAULT_DT_LEVELS (so the adaptive step can double at least
+        twice; 1e-7 s for the chain at the paper's values), for integrator = 'fixed' also at most
+        STABLE_FRACTION of the unique-root limit (2e-8 s at epsilon = 1e-2, the paper's step)."""
+        bound = STABLE_FRACTION * self.dt_stable / 2**DEFAULT_DT_LEVELS
+        if self.integrator == "fixed":
+            bound = min(bound, STABLE_FRACTION * self.dt_unique_root_limit)
+        decade = 10.0 ** math.floor(math.log10(bound))
+        return max(f * decade for f in (1.0, 2.0, 5.0) if f * decade <= bound * (1 + 1e-12))
+
+    @property
+    def dt_is_default(self) -> bool:
+        """True where dt was not given (:attr:`default_dt`): :meth:`with_updates` then chooses it again."""
+        return self._dt_auto
 
     @property
     def step_levels(self) -> int:
-        """integrator = 'adaptive': how often the step may double, dt * 2**k, while staying within the
-        explicit bounds (dt*omega_max and dt*2 z eta below 1.8), at most MAX_STEP_LEVELS."""
-        rate = max(self.omega_max, self._damping_rate)
+        """integrator = 'adaptive': how often the step may double, dt * 2**k, while the largest step
+        stays within STABLE_FRACTION of the stable step :attr:`dt_stable`, at most MAX_STEP_LEVELS."""
+        top = STABLE_FRACTION * self.dt_stable
         k = 0
-        while k < MAX_STEP_LEVELS and self.dt * 2.0 ** (k + 1) * rate < 2.0 * STABLE_FRACTION:
+        while k < MAX_STEP_LEVELS and self.dt * 2.0 ** (k + 1) <= top:
             k += 1
         return k
 
-    def _check_explicit_step(self, context: str) -> None:
-        """dt*omega_max < STABLE_FRACTION*2 (symplectic Euler's limit is 2); ``context`` says why it applies."""
-        w = self.omega_max
-        if not self.dt * w < 2.0 * STABLE_FRACTION:
-            raise ValueError(_message("dt", self.dt, f"dt < {2.0 * STABLE_FRACTION / w:.3g} s {context}: the explicit "
-                                      f"step needs dt*omega_max < {2.0 * STABLE_FRACTION:g}, omega_max = {w:.4g} 1/s"))
+    def _check_stable_step(self) -> None:
+        """dt below :attr:`dt_stable` (every geometry and integrator: the explicit part is the same)."""
+        bound = self.dt_stable
+        if not self.dt < bound:
+            drive = "dead weight" if self.dead_weight is not None else "spring drive"
+            raise ValueError(_message("dt", self.dt, f"dt < {bound:.4g} s, the largest stable step of the explicit "
+                                      f"springs and damping together (linear analysis of the scheme per mode; "
+                                      f"geometry = '{self.geometry}', {drive}); leave dt out for the default"))
 
     # --- derived quantities (MODEL.md tables) -------------------------------------------
     @property
@@ -268,6 +302,12 @@ class Config(BaseModel):
     def kappa_d(self) -> float:
         """Drive springs per area kappa_d = K_d/a**2 [Pa/m] (slab, halfspace)."""
         return self.K_d / self.a**2
+
+    @property
+    def top_stiffness(self) -> float | None:
+        """What holds the top of the slab [Pa/m]: the drive springs kappa_d, or None under the dead
+        weight (the top is the rigid plate that carries the weight: clamped for every q != 0)."""
+        return None if self.dead_weight is not None else self.kappa_d
 
     @property
     def c_s(self) -> float:
@@ -292,7 +332,7 @@ class Config(BaseModel):
 
         qx = math.pi / self.a if self.N > 1 else 0.0
         qy = math.pi / self.a if self.Ly > 1 else 0.0
-        k = float(interface_kernel(self.geometry, qx, qy, self.H, self.G, self.nu, self.kappa_d))
+        k = float(interface_kernel(self.geometry, qx, qy, self.H, self.G, self.nu, self.top_stiffness))
         return math.sqrt(self.a**2 * k / self.m)
 
     @property
@@ -368,14 +408,17 @@ class Config(BaseModel):
         return max(1, int(round(self.output_interval / self.dt)))
 
     def with_updates(self, **updates: Any) -> "Config":
-        """A new validated config with some values replaced."""
-        return make_config({**self.model_dump(), **updates})
+        """A new validated config with some values replaced; a default dt is chosen again."""
+        data = self.model_dump()
+        if self._dt_auto:
+            data.pop("dt")
+        return make_config({**data, **updates})
 
     def to_toml(self) -> str:
         """The config as flat TOML (None values omitted), readable by :func:`load_config`."""
         lines = []
         for key, value in self.model_dump().items():
-            if value is None or OFF.get(key, _NOT_OFF) == value:
+            if value is None or (OFF.get(key, _NOT_OFF) == value and Config.model_fields[key].default == value):
                 continue
             lines.append(f"{key} = {_toml_value(value)}")
         return "\n".join(lines) + "\n"
@@ -424,9 +467,12 @@ def make_config(data: Mapping[str, Any] | None = None, *, legacy: bool = False, 
     """Build a validated :class:`Config` from a mapping and/or keyword arguments.
 
     ``legacy=True`` (for stored files only) drops the keys of :data:`LEGACY_KEYS` that older
-    versions wrote; otherwise such a key is an error that says where it went.
+    versions wrote (otherwise such a key is an error that says where it went) and reads a key of
+    :data:`OFF` that is missing as its value there (what its absence meant when the file was written).
     """
     merged = {**(data or {}), **kwargs}
+    if legacy:  # a stored config without a key added since means what its absence meant then
+        merged = {**OFF, **merged}
     for key, why in LEGACY_KEYS.items():
         if key in merged:
             if not legacy:

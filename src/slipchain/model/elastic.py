@@ -138,9 +138,10 @@ def halfspace_kernel(qx: ArrayLike, qy: ArrayLike, G: float, nu: float, kappa_d:
 
 
 def interface_kernel(geometry: str, qx: ArrayLike, qy: ArrayLike, H: float, G: float, nu: float,
-                     kappa_d: float) -> np.ndarray:
+                     kappa_d: float | None) -> np.ndarray:
     """k(qx, qy) of the body above the interface for a config's ``geometry``: :func:`slab_kernel`
-    (top on the drive springs) for 'slab', :func:`halfspace_kernel` for 'halfspace'."""
+    (top on the drive springs kappa_d, or clamped to the rigid plate of the dead weight where
+    kappa_d is None) for 'slab', :func:`halfspace_kernel` for 'halfspace'."""
     if geometry == "slab":
         return slab_kernel(qx, qy, H, G, nu, kappa_d)
     if geometry == "halfspace":

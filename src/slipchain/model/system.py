@@ -103,11 +103,12 @@ def mu_star_norm(system: System) -> float:
 
 
 def uniform_stiffness(cfg: Config) -> float:
-    """k(0) [Pa/m]: the stiffness per area of the uniform mode of the slab, (H/G + 1/kappa_d)**-1, or of the
-    half-space, kappa_d (the drive springs alone)."""
+    """k(0) [Pa/m]: the stiffness per area of the uniform mode of the slab, (H/G + 1/kappa_d)**-1 (G/H
+    under the dead weight: the layer's shear against the plate), or of the half-space, kappa_d (the
+    drive springs alone)."""
     from .elastic import interface_kernel
 
-    return float(interface_kernel(cfg.geometry, 0.0, 0.0, cfg.H, cfg.G, cfg.nu, cfg.kappa_d))
+    return float(interface_kernel(cfg.geometry, 0.0, 0.0, cfg.H, cfg.G, cfg.nu, cfg.top_stiffness))
 
 
 def elastic_kernel(cfg: Config) -> np.ndarray:
@@ -116,7 +117,7 @@ def elastic_kernel(cfg: Config) -> np.ndarray:
     from .elastic import interface_kernel, wavenumbers
 
     return cfg.a**2 * interface_kernel(cfg.geometry, *wavenumbers(cfg.N, cfg.Ly, cfg.a), cfg.H, cfg.G, cfg.nu,
-                                       cfg.kappa_d)
+                                       cfg.top_stiffness)
 
 
 @dataclass
@@ -140,7 +141,8 @@ def initial_state(system: System) -> State:
     steady: every block moves at v_d; X_i = -F/K_d and x_i = X_i - F/K_T with
     F = (1/N) sum_contacts f(v_d, v*_i), so that drive and transverse springs carry the mean
     steady-sliding friction per block. Slab and half-space: x_i = -F/(a**2 k(0)) (the uniform mode
-    of the elastic kernel carries it), X = U = 0 (no upper layer).
+    of the elastic kernel carries it), X = U = 0 (no upper layer; under the dead weight the plate,
+    at X = 0 moving at U = v_d).
     """
     cfg = system.config
     n = cfg.n_blocks
@@ -150,8 +152,9 @@ def initial_state(system: System) -> State:
     force = system.steady_friction_per_block()
     if cfg.geometry in ("slab", "halfspace"):
         zeros = np.zeros(n)
+        plate = np.full(n, cfg.v_d) if cfg.dead_weight is not None else zeros.copy()
         return State(np.full(n, -force / (cfg.a**2 * uniform_stiffness(cfg))), np.full(n, cfg.v_d), zeros.copy(),
-                     zeros.copy(), 0)
+                     plate, 0)
     X = np.full(n, -force / cfg.K_d)
     x = X - force / cfg.K_T
     v = np.full(n, cfg.v_d)

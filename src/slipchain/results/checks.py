@@ -31,7 +31,7 @@ def stored_energy(system: System, state: State) -> float:
         from ..model.elastic import elastic_force
         from ..model.system import elastic_kernel
 
-        d = (x - drive).reshape(cfg.N, cfg.Ly)
+        d = (x - (X if cfg.dead_weight is not None else drive)).reshape(cfg.N, cfg.Ly)  # X: the plate
         return float(kinetic - 0.5 * np.sum(d * elastic_force(d, 0.0, elastic_kernel(cfg), 1.0)))
     if cfg.geometry == "chain2d":  # the (Lx, Ly) lattice, row-major (model.system)
         g = (cfg.N, cfg.Ly)

@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN,
-                      P_AMP, P_C, P_DT, P_ETAC, P_FOLD, P_M, P_META, P_SLOW, P_VD, Y_LOG)
+                      P_AMP, P_C, P_DT, P_ETAC, P_FOLD, P_KD, P_M, P_META, P_SLOW, P_VD, Y_LOG)
 from .base import Batch, ChunkOutput
 
 Y_TOL = 1e-13  # decades: the bracketed solver's own stopping rule
@@ -82,6 +82,8 @@ class ArrayBackend:
                              "and 'halfspace' only")
         if np.any(batch.params[:, P_FOLD] > 0):
             raise ValueError("integrator = 'fold' or 'adaptive' runs on the numba CPU path only in this version (backend='cpu')")
+        if np.any(batch.params[:, P_KD] == 0.0):
+            raise ValueError("the dead weight on the slab runs on the numba CPU path only in this version (backend='cpu')")
         xp, fft = self.xp, self.fft
         b, n = batch.x.shape
         lx, ly = batch.shape

@@ -253,12 +253,10 @@ class CUDABackend:
         return THREADS_MAX if rows <= _sm_count() else 128
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
-        if np.any(batch.params[:, S.P_FOLD] > 0):
-            raise ValueError("integrator = 'fold' or 'adaptive' runs on the CPU backend only in this version (backend='cpu')")
+        why = _refusal(batch)
+        if why is not None:
+            raise ValueError(f"{why} (backend='cpu' or 'auto')")
         if batch.geometry != "chain":
-            if batch.kernel is None:
-                raise ValueError(f"geometry = '{batch.geometry}' runs on the CPU backend only in this version "
-                                 "(backend='cpu'); the GPU kernel is the chain's, the slab's is CuPy's")
             if self._arrays is None:  # slab, half-space: the array code on CuPy (cuFFT)
                 from .arrays import cupy_backend
 
@@ -292,6 +290,15 @@ class CUDABackend:
 
 
 _STATE = ("x", "u", "X", "U", "step", "params", "sites", "vstar", "n_contacts", "ysolve", "status")
+
+
+def _refusal(batch: Batch) -> str | None:
+    """Why the GPU cannot run a batch (:func:`slipchain.model.capabilities.refusal`), or None."""
+    from ...model.capabilities import refusal
+
+    integrator = "adaptive" if batch.folds is not None else "fold" if np.any(batch.params[:, S.P_FOLD] > 0) else "fixed"
+    drives = {"dead_weight" if kd == 0.0 else "spring" for kd in batch.params[:, S.P_KD]}
+    return next((w for w in (refusal(batch.geometry, integrator, d, "gpu") for d in sorted(drives)) if w), None)
 
 
 class _DeviceBuffers:

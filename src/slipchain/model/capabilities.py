@@ -1,0 +1,69 @@
+"""Where each combination of the engine's pieces runs: one table, read by Config, the backends,
+``--backend auto`` and the docs (issue 26).
+
+A run is one choice of each piece: geometry ('chain', 'chain2d', 'slab', 'halfspace'), integrator
+('fixed', 'fold', 'adaptive'), drive ('spring', 'dead_weight') and backend ('cpu', 'gpu'). On the
+CPU every combination runs but one that has no physical meaning (a dead weight on a half-space,
+which has no top to carry it). On a GPU the numba.cuda kernel runs the chain with the fixed step
+(either drive), and CuPy's array code the slab and half-space with the fixed step and the spring
+drive; the rest is refused with the reason, and ``auto`` runs it on the CPU, saying so.
+
+:func:`refusal` is the table; :func:`table` lists it for the docs (docs/architecture.md) and the
+combination-matrix test (tests/physics/test_matrix.py). It lives with the config (model), which every layer may read.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+GEOMETRIES = ("chain", "chain2d", "slab", "halfspace")
+INTEGRATORS = ("fixed", "fold", "adaptive")
+DRIVES = ("spring", "dead_weight")
+BACKENDS = ("cpu", "gpu")
+
+
+def drive_of(cfg) -> str:
+    """'dead_weight' or 'spring' for a config."""
+    return "dead_weight" if cfg.dead_weight is not None else "spring"
+
+
+def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu") -> str | None:
+    """None where the combination runs, else why not (a sentence for an error message)."""
+    if geometry == "halfspace" and drive == "dead_weight":
+        return "a half-space has no top to carry the weight (use geometry = 'slab')"
+    if backend == "cpu":
+        return None
+    if integrator != "fixed":
+        return f"integrator = '{integrator}' runs on the CPU only in this version (the GPU paths have the fixed step)"
+    if geometry == "chain2d":
+        return "geometry = 'chain2d' runs on the CPU only in this version (the GPU kernel is the chain's)"
+    if geometry in ("slab", "halfspace") and drive == "dead_weight":
+        return ("the dead weight on the slab runs on the CPU only in this version (the GPU's array code has no "
+                "plate)")
+    return None
+
+
+def config_refusal(cfg, backend: str = "cpu") -> str | None:
+    """:func:`refusal` for a config."""
+    return refusal(cfg.geometry, cfg.integrator, drive_of(cfg), backend)
+
+
+def table() -> list[tuple[str, str, str, str, str | None]]:
+    """Every cell: (geometry, integrator, drive, backend, refusal or None)."""
+    return [(g, i, d, b, refusal(g, i, d, b))
+            for g, i, d, b in itertools.product(GEOMETRIES, INTEGRATORS, DRIVES, BACKENDS)]
+
+
+def markdown_table() -> str:
+    """The table as Markdown: one row per geometry and drive, one column per integrator and backend."""
+    cols = [(i, b) for b in BACKENDS for i in INTEGRATORS]
+    lines = ["| geometry | drive | " + " | ".join(f"{i} ({b})" for i, b in cols) + " |",
+             "|---|---|" + "---|" * len(cols)]
+    for g, d in itertools.product(GEOMETRIES, DRIVES):
+        cells = ["runs" if refusal(g, i, d, b) is None else "no" for i, b in cols]
+        lines.append(f"| {g} | {d} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+__all__ = ["BACKENDS", "DRIVES", "GEOMETRIES", "INTEGRATORS", "config_refusal", "drive_of", "markdown_table",
+           "refusal", "table"]

@@ -1,0 +1,161 @@
+"""The largest stable time step of the explicit part of the scheme, from its own linear analysis (issue 26).
+
+The scheme (:mod:`slipchain.engine.scheme`) is symplectic Euler with the springs and the damping
+both explicit; the contact force is implicit (backward Euler) and L-stable, so the bound comes from
+the contact-free system. It is linear and periodic, so its Fourier modes decouple; per mode the
+equations are ``M dv/dt = -K x - C v`` with 2 x 2 matrices for the two chains (IL, UL) and 1 x 1
+for the slab and half-space. One step h maps (x, v) to::
+
+    v' = v - h M^-1 (K x + C v),     x' = x + h v'.
+
+With xi = x/h (so that every entry is of order one) the amplification matrix of a mode is::
+
+    A = [[I - h^2 B, I - h D], [-h^2 B, I - h D]],   B = M^-1 K, D = M^-1 C,
+
+and the step is stable when every eigenvalue of every mode's A lies in the unit disk. For a scalar
+mode (the slab: B = omega^2, D = gamma) Jury's criterion gives it in closed form,
+``h^2 omega^2 + 2 h gamma < 4``, i.e. ``h < (sqrt(gamma^2 + 4 omega^2) - gamma)/omega^2``: the
+springs and the damping together, not each alone (the chain's stiffest mode is also its most
+damped, which is why bounding ``h omega_max`` and ``h 2 z eta`` separately overestimated it).
+
+Modes, with s = 2 - 2 cos(q a) along each axis (q on the periodic grid):
+
+* chain, chain2d (docs/model.md, Fig. 4 of the paper; chain2d adds the y springs)::
+
+      K = [[K s_x + K_Y s_y + K_T, -K_T], [-K_T, K_L s_x + K_LY s_y + K_T + K_d]]
+      C = m eta [[1 + s_x + s_y, -1], [-1, 1 + s_x + s_y]],   M = diag(m, N_L m)
+
+  (K_d = 0 under the dead weight: its uniform mode, both chains translating together, is then
+  marginal for every h, an eigenvalue 1 of a Jordan pair, and is not a limit);
+* slab, halfspace: B = a^2 k(q)/m on the rfft2 grid, D = gamma = c_s/a (radiation damping);
+  under the dead weight the slab's uniform mode couples the blocks' mean x to the plate X (mass
+  M = N_L m per block, :mod:`slipchain.engine.backends.spectral`), a 2 x 2 mode with
+  kappa = a^2 G/H::
+
+      B = [[kappa/m, -kappa/m], [-kappa/M, kappa/M]],   D = gamma [[1, -1], [-m/M, m/M]]
+
+:func:`stable_step` is what :class:`slipchain.model.config.Config` checks every ``dt`` against
+and what bounds the adaptive step's largest level. tests/physics/test_stability.py runs the engine
+just inside and just outside it.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from .elastic import interface_kernel, wavenumbers
+
+RADIUS_TOL = 1e-7  # |lambda| above 1 + this is growth (a Jordan pair at 1 is computed to ~1e-8)
+
+
+def chain_modes(N: int, Ly: int, m: float, N_L: int, K: float, K_L: float, K_T: float, K_d: float, K_Y: float,
+                K_LY: float, eta: float) -> tuple[np.ndarray, np.ndarray]:
+    """(B, D) = (M^-1 K, M^-1 C), shape (modes, 2, 2), of the chains' distinct Fourier modes (module
+    docstring); modes with the same (cos qx, cos qy) are counted once. The dead weight's
+    translation mode (K_d = 0, q = 0) is left out."""
+    sx = 2.0 - 2.0 * np.cos(2.0 * np.pi * np.arange(N // 2 + 1) / N)
+    sy = 2.0 - 2.0 * np.cos(2.0 * np.pi * np.arange(Ly // 2 + 1) / Ly)
+    sx, sy = (s.ravel() for s in np.meshgrid(sx, sy, indexing="ij"))
+    if K_d == 0.0:
+        sx, sy = sx[1:], sy[1:]
+    k = np.empty((sx.size, 2, 2))
+    k[:, 0, 0] = K * sx + K_Y * sy + K_T
+    k[:, 0, 1] = k[:, 1, 0] = -K_T
+    k[:, 1, 1] = K_L * sx + K_LY * sy + K_T + K_d
+    c = np.empty_like(k)
+    c[:, 0, 0] = c[:, 1, 1] = m * eta * (1.0 + sx + sy)
+    c[:, 0, 1] = c[:, 1, 0] = -m * eta
+    minv = np.array([1.0 / m, 1.0 / (N_L * m)])[None, :, None]
+    return minv * k, minv * c
+
+
+def amplification(B: np.ndarray, D: np.ndarray, h: float) -> np.ndarray:
+    """The step's amplification matrices (modes, 2d, 2d) in (x/h, v) for (modes, d, d) B and D."""
+    n, d, _ = B.shape
+    eye = np.broadcast_to(np.eye(d), B.shape)
+    A = np.empty((n, 2 * d, 2 * d))
+    A[:, :d, :d] = eye - h * h * B
+    A[:, :d, d:] = eye - h * D
+    A[:, d:, :d] = -h * h * B
+    A[:, d:, d:] = eye - h * D
+    return A
+
+
+def spectral_radius(B: np.ndarray, D: np.ndarray, h: float) -> float:
+    """Largest |eigenvalue| over the modes' amplification matrices at step h."""
+    return float(np.abs(np.linalg.eigvals(amplification(B, D, h))).max())
+
+
+def largest_stable_step(B: np.ndarray, D: np.ndarray, rel: float = 1e-10) -> float:
+    """The largest h with spectral radius <= 1 + RADIUS_TOL, by doubling then bisection to ``rel``.
+
+    Stability regions of these damped oscillators are intervals [0, h*) (for scalar modes exactly,
+    by Jury's criterion): the first unstable h found by doubling from far below bounds h* above."""
+    scale = math.sqrt(max(float(np.abs(B).max()), 1e-300)) + float(np.abs(D).max())
+    lo, hi = 0.0, 1e-3 / scale
+    while spectral_radius(B, D, hi) <= 1.0 + RADIUS_TOL:
+        lo, hi = hi, 2.0 * hi
+    while hi - lo > rel * hi:
+        mid = 0.5 * (lo + hi)
+        if spectral_radius(B, D, mid) <= 1.0 + RADIUS_TOL:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def scalar_stable_step(omega2: np.ndarray, gamma: float) -> float:
+    """min over scalar modes of the closed-form bound h < (sqrt(gamma^2 + 4 omega^2) - gamma)/omega^2
+    (Jury: h^2 omega^2 + 2 h gamma < 4; a mode with omega = 0 needs h gamma < 2)."""
+    w2 = float(np.max(omega2))
+    if w2 <= 0.0:
+        return 2.0 / gamma if gamma > 0.0 else math.inf
+    # 4 / (sqrt(gamma^2 + 4 w2) + gamma): the same number without cancellation when gamma >> omega
+    return 4.0 / (math.sqrt(gamma * gamma + 4.0 * w2) + gamma)
+
+
+@functools.lru_cache(maxsize=256)
+def _chain_stable_step(*args: float) -> float:
+    return largest_stable_step(*chain_modes(*args))
+
+
+def stable_step(cfg) -> float:
+    """The largest stable step dt [s] of ``cfg``'s geometry and drive (module docstring); the
+    scheme is stable for every dt below it."""
+    if cfg.geometry in ("chain", "chain2d"):
+        K_d = 0.0 if cfg.dead_weight is not None else cfg.K_d
+        return _chain_stable_step(cfg.N, cfg.Ly, cfg.m, cfg.N_L, cfg.K, cfg.K_L, cfg.K_T, K_d, cfg.K_Y, cfg.K_LY,
+                                  cfg.eta)
+    # the slab's and half-space's stiffest mode is at the grid's largest |q| (Config.omega_max), and the
+    # scalar bound falls with omega: that mode alone (tests/physics/test_stability.py checks every mode)
+    h = scalar_stable_step(np.array(cfg.omega_max**2), cfg.radiation_damping_rate)
+    if cfg.dead_weight is not None:
+        h = min(h, largest_stable_step(*plate_mode(cfg)))
+    return h
+
+
+def plate_mode(cfg) -> tuple[np.ndarray, np.ndarray]:
+    """(B, D), shape (1, 2, 2), of the slab's uniform mode under the dead weight (module docstring)."""
+    kappa = cfg.a**2 * float(interface_kernel(cfg.geometry, 0.0, 0.0, cfg.H, cfg.G, cfg.nu, cfg.top_stiffness))
+    m, M, g = cfg.m, cfg.N_L * cfg.m, cfg.radiation_damping_rate
+    B = np.array([[[kappa / m, -kappa / m], [-kappa / M, kappa / M]]])
+    D = g * np.array([[[1.0, -1.0], [-m / M, m / M]]])
+    return B, D
+
+
+def slab_modes(cfg) -> tuple[np.ndarray, np.ndarray]:
+    """(B, D) of the slab's or half-space's Fourier modes as (modes, 1, 1) arrays (for the generic
+    eigenvalue test of the closed form); under the dead weight without the uniform mode
+    (:func:`plate_mode`)."""
+    k = interface_kernel(cfg.geometry, *wavenumbers(cfg.N, cfg.Ly, cfg.a), cfg.H, cfg.G, cfg.nu, cfg.top_stiffness)
+    w2 = (cfg.a**2 * k / cfg.m).ravel()
+    if cfg.dead_weight is not None:
+        w2 = w2[1:]
+    return w2[:, None, None], np.full((w2.size, 1, 1), cfg.radiation_damping_rate)
+
+
+__all__ = ["RADIUS_TOL", "amplification", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
+           "slab_modes", "spectral_radius", "stable_step"]

@@ -1,0 +1,79 @@
+"""The combination matrix (issue 26): every geometry x integrator x drive runs on the CPU, or is refused
+with the capability table's reason (:mod:`slipchain.model.capabilities`).
+
+Each accepted cell, on a tiny system: the run closes its energy balance, a run crashed after a
+checkpoint resumes bit for bit, and the adaptive step agrees with the fixed step to the order its
+tolerance promises (the difference shrinks with step_tol).
+"""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from slipchain.engine import checkpoint as ckpt
+from slipchain.engine.simulate import run
+from slipchain.model.capabilities import DRIVES, GEOMETRIES, INTEGRATORS, refusal
+from slipchain.model.config import ConfigError, make_config
+
+GEOMETRY = {"chain": dict(N=8), "chain2d": dict(geometry="chain2d", N=4, Ly=4),
+            "slab": dict(geometry="slab", N=4, Ly=4), "halfspace": dict(geometry="halfspace", N=4, Ly=4)}
+DRIVE = {"spring": {}, "dead_weight": dict(dead_weight=0.7)}
+STEP = {"fixed": dict(dt=2e-8), "fold": dict(dt=1e-7), "adaptive": dict(dt=2e-8)}
+COMMON = dict(theta=0.5, start="steady", output_interval=1e-5, seed=1)
+CELLS = [(g, i, d) for g in GEOMETRIES for i in INTEGRATORS for d in DRIVES]
+
+
+def _config(geometry, integrator, drive, **kw):
+    return make_config(**COMMON, **GEOMETRY[geometry], **DRIVE[drive], integrator=integrator,
+                       **{**STEP[integrator], **kw})
+
+
+class Crash(Exception):
+    pass
+
+
+@pytest.mark.parametrize("geometry, integrator, drive", CELLS)
+def test_every_cell_runs_or_is_refused_by_the_table(geometry, integrator, drive, tmp_path, monkeypatch):
+    why = refusal(geometry, integrator, drive, "cpu")
+    if why is not None:
+        with pytest.raises(ConfigError, match="a combination that runs: " + why.split("(")[0]):
+            _config(geometry, integrator, drive, t_total=1.2e-3)
+        return
+    cfg = _config(geometry, integrator, drive, t_total=1.2e-3)  # three chunks of 0.5 ms
+    reference = run(cfg, progress=False)
+    assert np.isfinite(reference["f_d"].values).all() and np.isfinite(reference["x"].values).all()
+    assert reference.attrs["check_energy_balance_passed"] == 1, reference.attrs["check_energy_balance"]
+    path = tmp_path / "run.ckpt.nc"
+    original = ckpt.Checkpointer.save
+
+    def save(self):
+        original(self)
+        if self.writes >= 1:
+            raise Crash("after the first chunk")
+
+    with monkeypatch.context() as m:
+        m.setattr(ckpt.Checkpointer, "save", save)
+        with pytest.raises(Crash):
+            run(cfg, checkpoint=path, checkpoint_every=0, progress=False)
+    resumed = run(cfg, checkpoint=path, checkpoint_every=0, progress=False)
+    for ds in (reference, resumed):
+        for k in ("wall_time_s", "resumed_at"):
+            ds.attrs.pop(k, None)
+    xr.testing.assert_identical(reference, resumed)
+
+
+def _trace(ds, drive):
+    """What the run measures: f_d with the spring drive, the slider's position <X> under the dead weight."""
+    return ds["f_d"].values if drive == "spring" else ds["X_mean"].values
+
+
+@pytest.mark.parametrize("geometry, drive", [(g, d) for g in GEOMETRIES for d in DRIVES
+                                             if refusal(g, "adaptive", d) is None])
+def test_adaptive_step_converges_to_the_fixed_step(geometry, drive):
+    fixed = _trace(run(_config(geometry, "fixed", drive, t_total=1e-3), progress=False), drive)
+    diff = []
+    for tol in (1e-2, 1e-3):
+        ds = run(_config(geometry, "adaptive", drive, t_total=1e-3, step_tol=tol), progress=False)
+        diff.append(float(np.abs(_trace(ds, drive) - fixed).max() / np.abs(fixed).max()))
+    assert diff[0] < 1e-2  # a relative error of the order of the tolerance
+    assert diff[1] < diff[0]  # and smaller with a tighter tolerance
