@@ -67,7 +67,8 @@ def test_slab_fourier_mode_rings_at_its_frequency(geometry, mode):
     lx, ly = 16, 8
     errs = []
     for dt in (2e-9, 1e-9):
-        cfg = make_config(N=lx, Ly=ly, geometry=geometry, dt=dt, t_total=4e-7, output_interval=1e-8, start="steady")
+        cfg = make_config(N=lx, Ly=ly, geometry=geometry, dt=dt, t_total=4e-7, output_interval=1e-8, start="steady",
+                          integrator="fixed")
         system = build_system(cfg, np.array([0]), np.array([cfg.v0]))
         system = type(system)(cfg, np.zeros(0, np.int64), np.zeros(0))
         st = initial_state(system)
@@ -113,8 +114,9 @@ def test_slab_uniform_mode_from_rest_agrees_with_an_ode_solver():
 @pytest.mark.parametrize("geometry", ["chain2d", "slab", "halfspace"])
 def test_energy_balance_with_random_contacts(geometry):
     """Stick-slip on a 16 x 8 interface: the stored energy changes by the drive's work minus what
-    damping and contacts dissipate (results.checks) within the scheme's O(dt)."""
-    ds = sc.run(dict(N=16, Ly=8, geometry=geometry, theta=0.3, t_total=1e-3, start="steady"))
+    damping and contacts dissipate (results.checks) within the scheme's O(dt) (the fixed step at
+    2e-8 s; the default adaptive step in tests/physics/test_matrix.py)."""
+    ds = sc.run(dict(N=16, Ly=8, geometry=geometry, theta=0.3, t_total=1e-3, start="steady", integrator="fixed"))
     assert ds.attrs["check_energy_balance_passed"] == 1, ds.attrs["message"]
     assert ds.attrs["check_energy_balance"] < 1e-3
     assert np.isfinite(ds.attrs["mu_star"]) and ds.sizes["block"] == 128
@@ -130,33 +132,25 @@ def test_geometry_keys_keep_chain_member_ids_and_name_bad_values():
     assert member_id(two_d) != member_id(two_d.with_updates(geometry="halfspace"))
     assert 'geometry = "slab"' in two_d.to_toml()
     for bad, words in [(dict(Ly=4), "'Ly' has value 4; expected 1 with geometry = 'chain'"),
-                       (dict(geometry="slab", dead_weight=0.9), "'dead_weight'"),
-                       (dict(geometry="slab", N=8, E=1e11), "dt*omega_max"),
+                       (dict(geometry="halfspace", dead_weight=0.9), "'dead_weight' has value 0.9; expected a combination that runs: a half-space has no top"),
+                       (dict(geometry="slab", N=8, E=1e11, dt=2e-8), "largest stable step"),
                        (dict(geometry="torus"), "'geometry'"),
                        (dict(geometry="chain2d", Ly=0), "'Ly'")]:
         with pytest.raises(ConfigError, match=words.replace("*", r"\*").replace("(", r"\(")):
             make_config(**bad)
 
 
-def test_stable_step_bound_is_the_grid_maximum():
-    """Config.omega_max for the slab is sqrt(a**2 max k / m) over the whole rfft2 grid."""
-    cfg = make_config(geometry="slab", N=16, Ly=8)
-    assert cfg.omega_max == pytest.approx(math.sqrt(elastic_kernel(cfg).max() / cfg.m), rel=1e-12)
-    st = initial_state(build_system(cfg))
-    assert isinstance(st, State) and st.x.size == 128
-
-
 def test_gpu_backend_refuses_chain2d_and_needs_cupy_for_the_slab():
     """The CUDA kernel is the chain's: chain2d on it is an error that says so; the slab goes to the
     array code on CuPy, which names the extra to install where CuPy is missing (numba's CUDA
     simulator stands in for the GPU here, as in tests/physics/test_backends.py)."""
-    with pytest.raises(ValueError, match="CPU backend only"):
-        sc.run(dict(N=8, Ly=4, geometry="chain2d", t_total=1e-5), backend="gpu")
+    with pytest.raises(RuntimeError, match="geometry = 'chain2d' runs on the CPU only"):
+        sc.run(dict(N=8, Ly=4, geometry="chain2d", t_total=1e-5, integrator="fixed"), backend="gpu")
     try:
         import cupy  # noqa: F401
     except ImportError:
         with pytest.raises(ImportError, match="gpu-fft"):
-            sc.run(dict(N=8, Ly=4, geometry="slab", t_total=1e-5), backend="gpu")
+            sc.run(dict(N=8, Ly=4, geometry="slab", t_total=1e-5, integrator="fixed"), backend="gpu")
 
 
 @pytest.mark.parametrize("geometry", ["slab", "halfspace"])
@@ -167,7 +161,7 @@ def test_array_code_agrees_with_the_numba_loop(geometry):
     of two rows with different theta and v_d at once."""
     from slipchain.engine.backends.arrays import ArrayBackend
 
-    cfgs = [make_config(geometry=geometry, N=8, Ly=4, theta=th, v_d=v, t_total=1e-4, start="steady",
+    cfgs = [make_config(geometry=geometry, N=8, Ly=4, theta=th, v_d=v, t_total=1e-4, start="steady", integrator="fixed",
                         output_interval=1e-5, seed=s) for th, v, s in ((0.5, 1e-3, 1), (1.0, 3e-4, 2))]
     systems = [build_system(c) for c in cfgs]
     ref = sc.simulate_batch(systems)

@@ -77,3 +77,25 @@ def test_adaptive_step_converges_to_the_fixed_step(geometry, drive):
         diff.append(float(np.abs(_trace(ds, drive) - fixed).max() / np.abs(fixed).max()))
     assert diff[0] < 1e-2  # a relative error of the order of the tolerance
     assert diff[1] < diff[0]  # and smaller with a tighter tolerance
+
+
+def test_auto_backend_chooses_per_config_and_says_so():
+    """On a GPU host (numba's CUDA simulator stands in for one here) 'auto' gives the GPU the
+    combinations the table lets it run and the CPU the others, with a BackendFallback warning;
+    'gpu' refuses the others with the table's reason."""
+    from slipchain.engine.backends import BackendFallback, CPUBackend, get_backend
+    from slipchain.engine.backends.cuda import CUDABackend, cuda_available
+
+    if not cuda_available():  # pragma: no cover - numba without its CUDA target
+        pytest.skip("numba.cuda is not usable here (neither a GPU nor the simulator)")
+    fixed = _config("chain", "fixed", "spring", t_total=1e-5)
+    assert isinstance(get_backend("auto", [fixed]), CUDABackend)
+    for geometry, integrator, drive in CELLS:
+        why = refusal(geometry, integrator, drive, "gpu")
+        if why is None or refusal(geometry, integrator, drive, "cpu") is not None:
+            continue
+        cfg = _config(geometry, integrator, drive, t_total=1e-5)
+        with pytest.warns(BackendFallback, match="runs this batch on the CPU: " + why.split("(")[0]):
+            assert isinstance(get_backend("auto", [fixed, cfg]), CPUBackend)
+        with pytest.raises(RuntimeError, match="backend 'gpu' cannot run this config"):
+            get_backend("gpu", [cfg])

@@ -11,7 +11,7 @@ from scipy.optimize import brentq
 from slipchain.engine.backends import cpu as K
 from slipchain import make_config
 
-CFG = make_config()
+CFG = make_config(integrator="fixed")  # the fixed step's solver: dt below the unique-root limit
 M_EFF = CFG.m * (1 + CFG.dt * CFG.eta_c)
 B = CFG.dt * CFG.epsilon * CFG.f0
 

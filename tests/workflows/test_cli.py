@@ -36,8 +36,11 @@ def test_run_json_and_netcdf(tmp_path):
 
 def test_diverged_run_exits_1_and_still_writes(tmp_path):
     out = tmp_path / "bad.nc"
-    proc = _cli("run", "--set", "N=11", "--set", "theta=0.5", "--set", "E=1e15", "--set", "t_total=1e-4",
+    # From rest for 0.1 ms the chain is still loading (about 6 ms): the slider does not follow the
+    # drive, a failed physics check (a non-finite state is no longer reachable from the CLI: Config
+    # refuses every unstable step, issue 26; tests/physics/test_physics.py forces one)
+    proc = _cli("run", "--set", "N=11", "--set", "theta=0.5", "--set", "integrator=fixed", "--set", "t_total=1e-4",
                 "--out", str(out), "--json")
     assert proc.returncode == 1
-    assert json.loads(proc.stdout)["status"] == "diverged" and "non-finite" in proc.stderr
+    assert json.loads(proc.stdout)["status"] == "diverged" and "steady mean interface velocity" in proc.stderr
     assert read_dataset(out).attrs["status"] == "diverged"

@@ -50,11 +50,12 @@ def test_sweep_runs_every_member_and_matches_direct_runs(tmp_path, client):
 
 
 def test_resume_skips_finished_and_reruns_missing_and_failed(tmp_path, client):
-    sw = make_sweep({"name": "r", "base": FAST, "grid": {"E": [1e7, 1e15], "seed": [0, 1]}})
+    sw = make_sweep({"name": "r", "base": FAST, "grid": {"start": ["steady", "rest"], "seed": [0, 1]}})
     rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
-    # E = 1e15 Pa makes the explicit springs unstable at this dt: non-finite state, status diverged
+    # from rest the chain loads for about 6 ms, longer than the 3 ms run: the slider does not follow
+    # the drive, a failed physics check, status diverged
     assert len(rep.ran) == 4 and len(rep.failed) == 2 and not rep.ok
-    assert all(o.status == "diverged" and "non-finite state at step" in o.message for o in rep.failed)
+    assert all(o.status == "diverged" and "steady mean interface velocity" in o.message for o in rep.failed)
     st = Store.open(tmp_path / "s")
     assert len(st.completed_ids()) == 2 and len(st.failed_ids()) == 2
     done = sorted(st.completed_ids())

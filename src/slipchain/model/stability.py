@@ -51,13 +51,25 @@ from .elastic import interface_kernel, wavenumbers
 RADIUS_TOL = 1e-7  # |lambda| above 1 + this is growth (a Jordan pair at 1 is computed to ~1e-8)
 
 
+MAX_MODES = 2049  # per axis: above, the modes are sampled (the first and last, q = 0 and pi, always)
+
+
+def _wavenumbers(n: int) -> np.ndarray:
+    """The distinct wave numbers k = 0 ... n//2 of a periodic axis of n blocks, or MAX_MODES of them
+    evenly spread (both ends kept) for larger n, so that a huge config is refused by its memory
+    estimate instead of by this analysis; s(k) is smooth, and the stiffest mode is always included."""
+    if n // 2 + 1 <= MAX_MODES:
+        return np.arange(n // 2 + 1, dtype=float)
+    return np.unique(np.round(np.linspace(0, n // 2, MAX_MODES)))
+
+
 def chain_modes(N: int, Ly: int, m: float, N_L: int, K: float, K_L: float, K_T: float, K_d: float, K_Y: float,
                 K_LY: float, eta: float) -> tuple[np.ndarray, np.ndarray]:
     """(B, D) = (M^-1 K, M^-1 C), shape (modes, 2, 2), of the chains' distinct Fourier modes (module
     docstring); modes with the same (cos qx, cos qy) are counted once. The dead weight's
     translation mode (K_d = 0, q = 0) is left out."""
-    sx = 2.0 - 2.0 * np.cos(2.0 * np.pi * np.arange(N // 2 + 1) / N)
-    sy = 2.0 - 2.0 * np.cos(2.0 * np.pi * np.arange(Ly // 2 + 1) / Ly)
+    sx = 2.0 - 2.0 * np.cos(2.0 * np.pi * _wavenumbers(N) / N)
+    sy = 2.0 - 2.0 * np.cos(2.0 * np.pi * _wavenumbers(Ly) / Ly)
     sx, sy = (s.ravel() for s in np.meshgrid(sx, sy, indexing="ij"))
     if K_d == 0.0:
         sx, sy = sx[1:], sy[1:]

@@ -39,7 +39,7 @@ def get_backend(name: str | BackendName = BackendName.CPU, configs=()) -> Backen
     why = next((w for w in (config_refusal(c, "gpu") for c in configs) if w is not None), None)
     if name == BackendName.GPU:
         if why is not None:
-            raise ValueError(f"backend 'gpu' cannot run this config: {why}; use backend 'cpu' or 'auto'")
+            raise RuntimeError(f"backend 'gpu' cannot run this config: {why}; use backend 'cpu' or 'auto'")
         from .cuda import CUDABackend
 
         return CUDABackend()
