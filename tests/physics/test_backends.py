@@ -80,10 +80,13 @@ def test_runs_on_a_backend_match_the_cpu(backend):
     # Over 80 steps (simulator) the backends agree to round-off; over 1000 steps (CPU, a real GPU)
     # round-off differences (CPU fastmath reassociation, GPU fused multiply-adds) grow through the
     # dynamics: measured 8e-12 on an H100, hence the wider bound there.
-    tol = 1e-12 if backend.small else 1e-9
+    # On the CPU the reference is a second implementation of the same scheme (issue 26: it compared
+    # the CPU with itself): the chain run as chain2d with one row (the lattice stencil, its own loop).
+    tol = 1e-12 if backend.small or backend.name == "cpu" else 1e-9
     short = [c.with_updates(t_total=backend.steps(2e-5, 1.6e-6)) for c in CONFIGS[:3]]
     got = simulate_batch([build_system(c) for c in short], backend=backend.name)
-    ref = simulate_batch([build_system(c) for c in short], backend="cpu")
+    other = [c.with_updates(geometry="chain2d") for c in short] if backend.name == "cpu" else short
+    ref = simulate_batch([build_system(c) for c in other], backend="cpu")
     for g, r in zip(got, ref):
         # (too short for the after-run displacement check to pass from rest: same verdict on both)
         assert g.attrs["status"] == r.attrs["status"] and g.attrs["backend"] == backend.name

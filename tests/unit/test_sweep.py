@@ -69,7 +69,12 @@ def test_presets_define_fig6():
         assert {"N", "theta", "eta_c", "v_d", "seed"} <= set(sw.dims)
         assert set(sw.coords["eta_c"]) == {1e6, 3e5, 1e5} and set(sw.coords["v_d"]) == {1e-3, 3e-4}
         assert 301 in sw.coords["N"] and 1001 in sw.coords["N"]
-    main = [m for m in paper.members if m.coords["N"] == 301 and m.coords["dt"] == 2e-8 and m.coords["sem_target"] == 0.01]
+    # issue 26: both run the default integrator (adaptive) at the default base step, the paper's
+    # time-step grid at half of it
+    for sw in (quick, paper):
+        assert {m.config.integrator for m in sw.members} == {"adaptive"}
+    assert {m.config.dt for m in quick.members} == {make_config().dt} and set(paper.coords["dt"]) == {1e-7, 5e-8}
+    main = [m for m in paper.members if m.coords["N"] == 301 and m.coords["dt"] == 1e-7 and m.coords["sem_target"] == 0.01]
     thetas = sorted({m.coords["theta"] for m in main})
     assert len(thetas) >= 10 and thetas[0] == 0.05 and thetas[-1] == 1.0
     assert len(paper.coords["seed"]) >= 4

@@ -64,7 +64,11 @@ def estimate_bytes(cfg: Config) -> int:
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
     per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if cfg.geometry in ("slab", "halfspace") else 0)
-    return int(cfg.n_blocks * per_block + n_c * (BYTES_PER_CONTACT + S.N_CACC * 8 * chunks) + samples * BYTES_PER_SAMPLE)
+    per_contact = BYTES_PER_CONTACT
+    if cfg.integrator == "adaptive":  # the previous accelerations of both layers; each level's folds, the saved solver state
+        per_block += 16
+        per_contact += 16 * (cfg.step_levels + 1) + 24
+    return int(cfg.n_blocks * per_block + n_c * (per_contact + S.N_CACC * 8 * chunks) + samples * BYTES_PER_SAMPLE)
 
 
 def available_bytes() -> int | None:

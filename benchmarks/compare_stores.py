@@ -1,0 +1,65 @@
+"""Issue 26: two stores of the same sweep made with different integrators, member by member.
+
+Members are matched by their coordinates other than the integrator's own keys (dt, integrator,
+step_tol); for each pair z = (mu_a - mu_b)/sqrt(SE_a**2 + SE_b**2). Prints the number of pairs,
+the largest |z| and the rms z, how many pairs lie beyond 2 and 3 combined SE, and each store's
+sweep wall time (its invocations.jsonl) and summed member run time; ``--csv`` writes every pair.
+
+    .venv/bin/python benchmarks/compare_stores.py results/quick-fixed results/quick-default [--csv pairs.csv]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+
+OWN = {"dt", "integrator", "step_tol", "member_id", "status", "mu_star", "mu_star_sem", "t_total", "wall_time_s",
+       "message"}
+
+
+def _rows(store: Path) -> dict[tuple, dict]:
+    with (store / "index.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    keys = [k for k in rows[0] if k not in OWN]
+    return {tuple((k, float(r[k])) for k in keys): r for r in rows if r["status"] == "completed"}
+
+
+def _sweep_wall(store: Path) -> float:
+    total = 0.0
+    for line in (store / "invocations.jsonl").read_text().splitlines():
+        rec = json.loads(line)
+        total += float(rec.get("wall_time_s", rec.get("wall_s", 0.0)) or 0.0)
+    return total
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("a", type=Path)
+    ap.add_argument("b", type=Path)
+    ap.add_argument("--csv", type=Path)
+    args = ap.parse_args()
+    ra, rb = _rows(args.a), _rows(args.b)
+    common = sorted(set(ra) & set(rb))
+    z = np.array([(float(ra[k]["mu_star"]) - float(rb[k]["mu_star"]))
+                  / np.hypot(float(ra[k]["mu_star_sem"]), float(rb[k]["mu_star_sem"])) for k in common])
+    print(f"pairs: {len(common)} (completed in {args.a}: {len(ra)}, in {args.b}: {len(rb)})")
+    print(f"largest |z| {np.abs(z).max():.2f}, rms z {np.sqrt(np.mean(z**2)):.2f}, mean z {z.mean():+.2f}; "
+          f"|z| > 2: {int((np.abs(z) > 2).sum())}, |z| > 3: {int((np.abs(z) > 3).sum())}")
+    for store, rows in ((args.a, ra), (args.b, rb)):
+        run = sum(float(r["wall_time_s"]) for r in rows.values())
+        print(f"{store}: sweep wall {_sweep_wall(store):.1f} s, members' run time {run:.1f} s")
+    if args.csv:
+        with args.csv.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow([k for k, _ in common[0]] + ["mu_a", "se_a", "mu_b", "se_b", "z"])
+            for k, zz in zip(common, z):
+                w.writerow([v for _, v in k] + [ra[k]["mu_star"], ra[k]["mu_star_sem"], rb[k]["mu_star"],
+                                                rb[k]["mu_star_sem"], f"{zz:.3f}"])
+
+
+if __name__ == "__main__":
+    main()
