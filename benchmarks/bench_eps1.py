@@ -28,12 +28,13 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=2)
     args = ap.parse_args()
-    run(make_config(N=11, theta=0.5, t_total=1e-5))  # compile
+    run(make_config(N=11, theta=0.5, t_total=1e-5, integrator="fixed"))  # compile
     run(make_config(N=11, theta=0.5, t_total=1e-5, integrator="adaptive", dt=1e-7))
     print(f"# {platform.processor() or platform.machine()}; reference point, seeds 0..{args.seeds - 1}")
     print("| epsilon | settings | seed | simulated (s) | wall (s) | wall per simulated s | mu_star | SE |")
     print("|---|---|---|---|---|---|---|---|")
-    cases = [(1e-2, "fixed 2e-8, rest", {}), (1e-2, "eps1 preset", PRESET), (1.0, "eps1 preset", PRESET)]
+    cases = [(1e-2, "fixed 2e-8, rest", dict(integrator="fixed", dt=2e-8)), (1e-2, "eps1 preset", PRESET),
+             (1.0, "eps1 preset", PRESET)]
     walls = {}
     for eps, label, extra in cases:
         for seed in range(args.seeds):

@@ -28,7 +28,7 @@ def main() -> None:
     ap.add_argument("--dts", type=float, nargs="+", default=[5e-8, 1e-7, 2e-7])
     ap.add_argument("--tols", type=float, nargs="*", default=[1e-2, 1e-3])
     args = ap.parse_args()
-    run(make_config(N=11, theta=0.5, t_total=1e-5))  # compile
+    run(make_config(N=11, theta=0.5, t_total=1e-5, integrator="fixed"))  # compile
     run(make_config(N=11, theta=0.5, t_total=1e-5, integrator="fold", dt=1e-7))
     run(make_config(N=11, theta=0.5, t_total=1e-5, integrator="adaptive", dt=1e-7))
     print(f"# {platform.processor() or platform.machine()}; reference point, {args.seeds} seeds")

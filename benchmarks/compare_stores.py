@@ -1,7 +1,8 @@
 """Issue 26: two stores of the same sweep made with different integrators, member by member.
 
-Members are matched by their coordinates other than the integrator's own keys (dt, integrator,
-step_tol); for each pair z = (mu_a - mu_b)/sqrt(SE_a**2 + SE_b**2). Prints the number of pairs,
+Members are matched by their coordinates other than the integrator's own keys (integrator,
+step_tol) and dt, which is matched by its ratio to the store's largest dt (so that a time-step
+grid at half the step pairs with the other's half step); for each pair z = (mu_a - mu_b)/sqrt(SE_a**2 + SE_b**2). Prints the number of pairs,
 the largest |z| and the rms z, how many pairs lie beyond 2 and 3 combined SE, and each store's
 sweep wall time (its invocations.jsonl) and summed member run time; ``--csv`` writes every pair.
 
@@ -25,7 +26,13 @@ def _rows(store: Path) -> dict[tuple, dict]:
     with (store / "index.csv").open() as fh:
         rows = list(csv.DictReader(fh))
     keys = [k for k in rows[0] if k not in OWN]
-    return {tuple((k, float(r[k])) for k in keys): r for r in rows if r["status"] == "completed"}
+    top = max(float(r["dt"]) for r in rows) if "dt" in rows[0] else None
+
+    def key(r):
+        role = (("dt_ratio", round(float(r["dt"]) / top, 6)),) if top else ()
+        return tuple((k, float(r[k])) for k in keys) + role
+
+    return {key(r): r for r in rows if r["status"] == "completed"}
 
 
 def _sweep_wall(store: Path) -> float:

@@ -21,7 +21,7 @@ REGIMES = [(1e-3, 1.0), (1e-3, 0.1), (3e-4, 1.0), (3e-4, 0.1)]
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--dt", type=float, default=make_config().dt)
+    ap.add_argument("--dt", type=float, default=make_config(integrator="fixed").dt)
     ap.add_argument("--eta-c", type=float, default=1e5)
     args = ap.parse_args()
     print("| v_d (m/s) | theta | mu_star(dt) | mu_star(dt/2) | diff | diff / SE(dt) | diff / combined SE | wall (s) |")
@@ -29,7 +29,7 @@ def main() -> None:
     for v_d, theta in REGIMES:
         res = []
         for dt in (args.dt, args.dt / 2):
-            ds = run(make_config(v_d=v_d, theta=theta, dt=dt, eta_c=args.eta_c))
+            ds = run(make_config(v_d=v_d, theta=theta, dt=dt, eta_c=args.eta_c, integrator="fixed"))
             res.append(ds.attrs)
         (a, b) = res
         diff = b["mu_star"] - a["mu_star"]

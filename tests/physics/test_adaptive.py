@@ -137,3 +137,17 @@ def test_adaptive_keys_errors_and_ids():
         make_config(min_cycles=5, t_total=1e-3)
     with pytest.raises(ConfigError, match="largest stable step of the explicit springs and damping together"):
         make_config(integrator="adaptive", dt=5e-7, eta=3e6)
+
+
+def test_a_run_of_too_few_slip_cycles_says_how_to_converge():
+    """Issue 26: at epsilon = 1 a slip cycle lasts about a second; a run that reaches t_max with a few
+    cycles in its window says so and what converges it (counted again here from the trace); a noisy
+    run that reaches t_max does not get the advice."""
+    long = sc.run(dict(N=31, theta=1.0, epsilon=1.0, start="steady", t_max=0.05, output_interval=1e-4, seed=1))
+    fd = long.f_d.values
+    cycles = count_cycles(fd[steady_estimate(fd).start:])
+    msg = long.attrs["message"]
+    assert "t_max = 0.05 s reached" in msg and cycles < 5
+    assert f"holds only {cycles} cycle(s) of f_d" in msg and "min_cycles = 20" in msg
+    noisy = sc.run(dict(N=31, theta=0.5, sem_target=1e-6, t_max=0.01, seed=1))
+    assert "t_max = 0.01 s reached" in noisy.attrs["message"] and "cycle(s)" not in noisy.attrs["message"]

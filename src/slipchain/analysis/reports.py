@@ -36,7 +36,7 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
         + (f"; wall time of the sweep {wall_time_s / 60:.1f} min with {ds.attrs.get('workers', '?')} local worker "
            f"process(es) ({ds.attrs.get('invocations', 1)} invocation(s) that ran members, from the store's "
            "invocations.jsonl)." if wall_time_s is not None else "."),
-        f"- Base: epsilon = {cfg.epsilon:g}, dt = {cfg.dt:g} s, start = {cfg.start}, automatic run length until "
+        f"- Base: epsilon = {cfg.epsilon:g}, {_step_text(cfg)}, start = {cfg.start}, automatic run length until "
         f"SE(mu_star) <= {cfg.sem_target:g} (at most t_max = {cfg.t_max:g} s), slipchain {_versions(ds)}.",
         "- Error bars: seed mean of mu_star, error sqrt(max(var_seeds/n, mean(SE_time^2)/n)).",
         "",
@@ -84,6 +84,14 @@ def run_time_text(ds: xr.Dataset) -> str:
     gpu = (f"{int(on_gpu.sum())} members ran on the GPU in {batches.size} batch(es) whose wall times add up to "
            f"{batches.sum() / 60:.1f} min (batches run concurrently; a member records its batch's wall time)")
     return gpu if on_gpu.all() else f"{text} ({int((~on_gpu).sum())} members); {gpu}"
+
+
+def _step_text(cfg) -> str:
+    """Which step made the results (issue 26: the integrator is part of what a report states)."""
+    if cfg.integrator == "adaptive":
+        return (f"integrator = adaptive from dt = {cfg.dt:g} s (steps up to {cfg.dt * 2**cfg.step_levels:g} s, "
+                f"step_tol = {cfg.step_tol:g})")
+    return f"integrator = {cfg.integrator}, dt = {cfg.dt:g} s"
 
 
 def _versions(ds: xr.Dataset) -> str:

@@ -26,6 +26,7 @@ DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace eac
 # (each classification fits the whole trace: checking every chunk would cost as much as the run)
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
 LONG_CHUNK_TIME = 0.05  # ... for runs with min_cycles (epsilon = 1: runs of tens of seconds, 1 ms samples)
+FEW_CYCLES = 5  # at t_max with fewer cycles than this in the steady window, the message says how to converge
 MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
 MIN_STEADY_SLIDE = 1e-6  # ...and a steady window in which the drive has moved at least this far (m):
 # at very low v_d a steady start can look converged (tiny SE, no drift) long before it has settled
@@ -95,6 +96,21 @@ class UntilConverged:
                 and (not cfg.min_cycles or self._cycles_ok(fd[est.start:]))):
             self.reached = True
         return self.reached
+
+    def few_cycles_advice(self) -> str:
+        """At t_max without convergence: if the steady window holds fewer than FEW_CYCLES cycles of f_d
+        (the whole interface stick-slipping in cycles longer than the run, as at epsilon = 1), say
+        so and what lets such a run converge; else nothing."""
+        if not self.f_d:
+            return ""
+        fd = np.concatenate(self.f_d)
+        window = fd[steady_estimate(fd).start:]
+        cycles = count_cycles(window)
+        if cycles >= FEW_CYCLES or window.std() <= 1e-12 * max(abs(window.mean()), 1e-300):
+            return ""
+        return (f"; the steady window holds only {cycles} cycle(s) of f_d (slip cycles as long as the run): give "
+                "t_max long enough for tens of cycles with min_cycles = 20, output_interval = 1e-3 and "
+                "start = 'steady', as presets/fig6-eps1.toml does for epsilon = 1")
 
     def _cycles_ok(self, window: np.ndarray) -> bool:
         """min_cycles cycles in the steady window, or a window that varies less than sem_target
@@ -194,7 +210,7 @@ class RowControl:
     def final_message(self, t_max: float, sem_target: float) -> str:
         if self.converge is not None and self.status == Status.COMPLETED and not self.converge.reached:
             return (f"t_max = {t_max:g} s reached before the standard error fell below "
-                    f"sem_target = {sem_target:g}")
+                    f"sem_target = {sem_target:g}" + self.converge.few_cycles_advice())
         if self.decide is not None and self.status == Status.COMPLETED and not self.decide.reached:
             return f"t_max = {t_max:g} s reached while the dead-weight velocity still drifted (see velocity_reason)"
         return self.message

@@ -28,10 +28,13 @@ Scheme (one step n -> n+1, dt):
 
 Without contacts and damping this is symplectic Euler: first order in the velocities
 (second order for positions, being leapfrog with velocities at half steps), with a bounded
-energy error for dt < 2/omega_max ~ 1e-6 s. The contact term is L-stable (backward Euler), so
-the ~1e-15 s relaxation times of f near sticking (MODEL.md, numerical facts) impose no limit;
-the only limit is that the scalar equation keep one root, dt*max|df/du|_weakening < m, which
-:class:`slipchain.model.config.Config` enforces. Explicit damping needs dt*eta*6 < 2 (dt < 1e-6 s).
+energy error. The springs and the explicit damping together bound the step: per Fourier mode
+h**2 omega**2 + 2 h gamma < 4 in the scalar case, the eigenvalues of each mode's amplification
+matrix in general (:mod:`slipchain.model.stability`; 6.87e-7 s at the paper's values), which
+:class:`slipchain.model.config.Config` enforces for every integrator (issue 26). The contact term is
+L-stable (backward Euler), so the ~1e-15 s relaxation times of f near sticking (docs/model.md,
+numerical facts) impose no limit; the fixed step's only other limit is that the scalar equation
+keep one root, dt*max|df/du|_weakening < m (integrator = 'fold' and 'adaptive' lift it).
 Overall order: 1 (checked by tests/test_convergence.py).
 
 Batch layout: arrays of shape (B, N) for the state, (B, C) for contacts (padded; ``n_contacts``

@@ -99,10 +99,12 @@ class Config(BaseModel):
     (dead weight only): the duration of the force's linear ramp instead of a quarter of
     ``t_decide`` (or of the run). The ramp must be slow against the creep relaxation, or the
     slider overshoots past the maximum (docs/guide/mechanism.md);
-    ``integrator``: 'fixed' (the scheme of slipchain.engine.scheme, dt below the unique-root
-    limit), 'fold' (fold-aware contacts: dt bounded by the explicit springs and dampers only) or
-    'adaptive' (the fold scheme with a step dt*2**k up to that bound, error-controlled by
-    ``step_tol`` in units of v_d: :mod:`slipchain.engine.backends.adaptive`; issue 12);
+    ``integrator``: 'adaptive' (the default since issue 26: the fold scheme with a step dt*2**k up
+    to 0.9 of the stable step, error-controlled by ``step_tol`` in units of v_d:
+    :mod:`slipchain.engine.backends.adaptive`), 'fixed' (the scheme of slipchain.engine.scheme, dt
+    below the unique-root limit; the default before, and what a stored config without the key
+    means) or 'fold' (fold-aware contacts: dt bounded by the explicit springs and dampers only);
+    ``dt`` absent: :attr:`default_dt`; every dt must lie below :attr:`dt_stable`;
     ``min_cycles``: the automatic length also needs this many cycles of f_d in its steady window
     (:class:`slipchain.engine.control.UntilConverged`; for the long slip cycles at epsilon = 1);
     ``output_interval`` sampling interval of f_d(t) (each sample is the average over the

@@ -4,7 +4,8 @@ At the physical contact stiffness (epsilon = 1) a slip cycle is a few millisecon
 about a second of reloading, during which every contact sits on its sticking branch and the
 chain creeps. The fold-aware contact solve (:func:`~slipchain.engine.scheme.solve_contact_fold`)
 has no step limit of its own, so the step is bounded only by the explicit springs and dampers
-(Config: dt*omega_max and dt*2 z eta below 1.8). This kernel runs the scheme of
+(Config.dt_stable, their linear stability limit together; the largest level stays within 0.9 of
+it, issue 26). This kernel runs the scheme of
 :mod:`slipchain.engine.scheme` unchanged (the CPU's compiled parts: :mod:`.cpu`) with a step
 h = dt * 2**k, k = 0 ... ``Config.step_levels``:
 
