@@ -103,10 +103,13 @@ class UntilConverged:
         so and what lets such a run converge; else nothing."""
         if not self.f_d:
             return ""
-        fd = np.concatenate(self.f_d)
-        window = fd[steady_estimate(fd).start:]
+        fd = np.concatenate(self.f_d) / mu_star_norm(self.system)
+        start = steady_estimate(fd).start
+        window = fd[start:]
         cycles = count_cycles(window)
-        if cycles >= FEW_CYCLES or window.std() <= 1e-12 * max(abs(window.mean()), 1e-300):
+        steady_sliding = (window.std() <= self.system.config.sem_target
+                          and self._follows_drive(np.concatenate(self.x_mean), start))  # no cycles to count
+        if cycles >= FEW_CYCLES or steady_sliding:
             return ""
         return (f"; the steady window holds only {cycles} cycle(s) of f_d (slip cycles as long as the run): give "
                 "t_max long enough for tens of cycles with min_cycles = 20, output_interval = 1e-3 and "

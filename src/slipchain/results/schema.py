@@ -200,7 +200,7 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
         if failed and status == Status.COMPLETED:
             status = Status.DIVERGED
             message = "physics check failed at the end of the run (t = %.6e s): %s" % (
-                n * interval, "; ".join(c.message for c in failed))
+                n * interval, "; ".join(c.message for c in failed)) + (f" (and: {message})" if message else "")
 
     # Per-contact averages over the chunks that lie wholly in the steady window.
     sums = np.zeros((system.n_contacts, 4))
