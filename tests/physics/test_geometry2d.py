@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 import slipchain as sc
 from slipchain.model.config import ConfigError, make_config
-from slipchain.model.system import State, build_system, elastic_kernel, initial_state, uniform_stiffness
+from slipchain.model.system import build_system, elastic_kernel, initial_state, uniform_stiffness
 from slipchain.sweeps.definition import member_id
 
 

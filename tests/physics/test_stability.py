@@ -13,8 +13,7 @@ import pytest
 
 from slipchain.engine.simulate import simulate
 from slipchain.model.config import Config, ConfigError, make_config
-from slipchain.model.stability import (chain_modes, largest_stable_step, plate_mode, slab_modes, spectral_radius,
-                                       stable_step)
+from slipchain.model.stability import chain_modes, largest_stable_step, plate_mode, slab_modes, spectral_radius
 from slipchain.model.system import State, build_system
 
 # Contact-free systems: one contact whose force is negligible (epsilon tiny) and no contact damping.

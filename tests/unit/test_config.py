@@ -98,7 +98,7 @@ def test_cli_rejects_bad_config_and_writes_nothing(tmp_path):
 
 def test_backend_is_not_a_config_key_but_old_files_with_it_still_load(tmp_path):
     from slipchain.model.config import config_from_toml
-    from slipchain.sweeps.definition import make_sweep, member_id
+    from slipchain.sweeps.definition import make_sweep
     from slipchain.sweeps.store import Store
 
     with pytest.raises(ConfigError, match="config key 'backend' .* is no longer accepted: how a run is executed"):
