@@ -159,7 +159,7 @@ def record_field(system: System, state: State, duration: float, interval: float,
     batch = Batch.pack([system], [state.copy()])
     field = FieldRecorder(system, n, positions=positions)
     control = RowControl(limit=n)
-    drive(get_backend(backend), batch, [control], sample_steps=steps, chunk=1, interval=steps * cfg.dt,
+    drive(get_backend(backend, [cfg]), batch, [control], sample_steps=steps, chunk=1, interval=steps * cfg.dt,
           observers=[field])
     if control.status == Status.DIVERGED:
         raise FloatingPointError(f"non-finite state during the field recording at step {int(batch.status[0])}")
