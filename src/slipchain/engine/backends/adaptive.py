@@ -34,8 +34,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, P_AMP, P_ETAC, P_KLY, P_KY, P_LAT, P_LY,
-                      P_ML, Y_FA, Y_FB, Y_LOG, Y_P, Y_Q)
+from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, N_YS_STATE, P_AMP, P_ETAC, P_KLY, P_KY,
+                      P_LAT, P_LY, P_ML, Y_FA, Y_FB)
 from .cpu import _contacts, _end_sample, _explicit_step, _move, _refresh_solver, row_parameters
 
 STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step multiplies err by ~4)
@@ -54,6 +54,41 @@ def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
         ca[C_SLOW, k] += w if abs(uk[k]) < slow else 0.0
         p += fk[k] * uk[k]
     return p
+
+
+@nb.njit(cache=True)
+def _grid_level(level, j, sample_steps):
+    """The highest level up to ``level`` whose step starts on its grid (j base steps into the sample,
+    a multiple of 2**level) and ends within the sample (module docstring, "Time grid")."""
+    while level > 0 and (j % (1 << level) != 0 or j + (1 << level) > sample_steps):
+        level -= 1
+    return level
+
+
+@nb.njit(cache=True)
+def _load_folds(nc, ys, folds_level):
+    """The contacts' folds at this level's step (``folds_level``: (2, C)) into the solver's input rows."""
+    for k in range(nc):
+        ys[Y_FA, k] = folds_level[0, k]
+        ys[Y_FB, k] = folds_level[1, k]
+
+
+@nb.njit(cache=True)
+def _copy_solver_state(nc, src, dst):
+    """The contacts' solver state (its first N_YS_STATE rows: y, 10**y, exp(-c y^2)) from ``src`` to
+    ``dst``: kept before a step that may be rejected, put back when it is."""
+    for i in range(N_YS_STATE):
+        for k in range(nc):
+            dst[i, k] = src[i, k]
+
+
+@nb.njit(cache=True)
+def _rejected_level(level, err, tol):
+    """After a rejected step: the level where the estimate, falling by 4 per halving, meets tol."""
+    while level > 0 and err > tol:
+        level -= 1
+        err *= 0.25
+    return level
 
 
 @nb.njit(cache=True)
@@ -94,7 +129,7 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
     fk = np.empty(cmax)
     ok = np.empty(cmax, dtype=np.bool_)
     aprev = np.empty(2 * n)
-    ysave = np.empty((3, cmax))
+    ysave = np.empty((N_YS_STATE, cmax))
     for row in range(nb_rows):
         if status[row] >= 0:
             continue
@@ -128,12 +163,9 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
             loaded = -1
             have = False
             while j < sample_steps:
-                while level > 0 and (j % (1 << level) != 0 or j + (1 << level) > sample_steps):
-                    level -= 1
+                level = _grid_level(level, j, sample_steps)
                 if level != loaded:
-                    for k in range(nc):
-                        ys[Y_FA, k] = folds[row, level, 0, k]
-                        ys[Y_FB, k] = folds[row, level, 1, k]
+                    _load_folds(nc, ys, folds[row, level])
                     loaded = level
                 w = 1 << level
                 h = dt0 * w
@@ -141,20 +173,12 @@ def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, c
                 fsum = _explicit_step(lattice, ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
                                       drive, fconst, h / m, h / mL)
                 if level > 0:  # keep the contacts' solver state: the step may be rejected
-                    for k in range(nc):
-                        ysave[0, k] = ys[Y_LOG, k]
-                        ysave[1, k] = ys[Y_P, k]
-                        ysave[2, k] = ys[Y_Q, k]
+                    _copy_solver_state(nc, ys, ysave)
                 _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m * (1.0 + h * etac), h * amp, c, 1.0 / h, True)
                 err = _error(n, ur, Ur, un, Un, aprev, h) if have else 0.0
                 if level > 0 and err > tol:  # rejected (a slip event starts): again from the same state, finer
-                    for k in range(nc):
-                        ys[Y_LOG, k] = ysave[0, k]
-                        ys[Y_P, k] = ysave[1, k]
-                        ys[Y_Q, k] = ysave[2, k]
-                    while level > 0 and err > tol:
-                        level -= 1
-                        err *= 0.25
+                    _copy_solver_state(nc, ysave, ys)
+                    level = _rejected_level(level, err, tol)
                     control[row, 3] += 1.0
                     continue
                 _keep_acceleration(n, ur, Ur, un, Un, aprev, h)

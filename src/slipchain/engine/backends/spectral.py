@@ -46,9 +46,10 @@ import math
 import numba as nb
 import numpy as np
 
-from ..scheme import (FASTMATH, A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN, O_XUMEAN, P_AMP, P_C,
-                      P_ETAC, P_FOLD, P_KD, P_ML, Y_FA, Y_FB, Y_LOG, Y_P, Y_Q)
-from .adaptive import STEP_UP, _error, _keep_acceleration, _weighted_contact_sums
+from ..scheme import (FASTMATH, A_WCONTACT, A_WDAMP, A_WDRIVE, N_ACC, N_CACC, N_OUT, N_YS_STATE, O_FD, O_XMEAN, O_XUMEAN,
+                      P_AMP, P_C, P_ETAC, P_FOLD, P_KD, P_ML)
+from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
+                       _rejected_level, _weighted_contact_sums)
 from .base import Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _refresh_solver, row_parameters
 
@@ -172,13 +173,9 @@ def _adaptive_step(F, x, u, X, U, step, params, k0, sites, vstar, n_contacts, ys
         nc = n_contacts[row]
         xr, ur, Xr, Ur, ys = x[row], u[row], X[row], U[row], ysolve[row]
         while True:
-            lv = level[row]
-            while lv > 0 and (j[row] % (1 << lv) != 0 or j[row] + (1 << lv) > sample_steps):
-                lv -= 1
+            lv = _grid_level(level[row], j[row], sample_steps)
             if lv != loaded[row]:
-                for k in range(nc):
-                    ys[Y_FA, k] = folds[row, lv, 0, k]
-                    ys[Y_FB, k] = folds[row, lv, 1, k]
+                _load_folds(nc, ys, folds[row, lv])
                 loaded[row] = lv
             w = 1 << lv
             h = dt0 * w
@@ -187,22 +184,13 @@ def _adaptive_step(F, x, u, X, U, step, params, k0, sites, vstar, n_contacts, ys
             for i in range(n):
                 Un[i] = Unew if dead else Ur[i]
             if lv > 0:  # keep the contacts' solver state: the step may be rejected
-                for k in range(nc):
-                    ysave[0, k] = ys[Y_LOG, k]
-                    ysave[1, k] = ys[Y_P, k]
-                    ysave[2, k] = ys[Y_Q, k]
+                _copy_solver_state(nc, ys, ysave)
             _contacts(nc, un, sites[row], rk, ra, uk, fk, ok, vstar[row], ys, m, m * (1.0 + h * etac), h * amp, c,
                       1.0 / h, True)
             err = _error(n, ur, Ur, un, Un, aprev[row], h) if have[row] else 0.0
             if lv > 0 and err > tol:  # rejected: again from the same state (the same elastic force), finer
-                for k in range(nc):
-                    ys[Y_LOG, k] = ysave[0, k]
-                    ys[Y_P, k] = ysave[1, k]
-                    ys[Y_Q, k] = ysave[2, k]
-                while lv > 0 and err > tol:
-                    lv -= 1
-                    err *= 0.25
-                level[row] = lv
+                _copy_solver_state(nc, ysave, ys)
+                level[row] = _rejected_level(lv, err, tol)
                 control[row, 3] += 1.0
                 continue
             _keep_acceleration(n, ur, Ur, un, Un, aprev[row], h)
@@ -271,7 +259,7 @@ def advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkO
     if adaptive:
         aprev = np.zeros((b, 2 * n))
         Un = np.empty(n)
-        ysave = np.empty((3, cmax))
+        ysave = np.empty((N_YS_STATE, cmax))
     for s in range(n_samples):
         for row in np.flatnonzero(batch.status < 0):  # exact 10**y, exp(-c y^2) at every sample, as the chain's
             _refresh_solver(batch.n_contacts[row], batch.ysolve[row], batch.params[row, P_C])
