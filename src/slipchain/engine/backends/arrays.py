@@ -23,8 +23,8 @@ import math
 import numpy as np
 
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN,
-                      P_AMP, P_C, P_DT, P_ETAC, P_FOLD, P_KD, P_M, P_META, P_SLOW, P_VD, Y_LOG)
-from .base import Batch, ChunkOutput
+                      P_AMP, P_C, P_DT, P_ETAC, P_M, P_META, P_SLOW, P_VD, Y_LOG)
+from .base import Batch, ChunkOutput, gpu_refusal
 
 Y_TOL = 1e-13  # decades: the bracketed solver's own stopping rule
 MAX_ITER = 200
@@ -80,10 +80,9 @@ class ArrayBackend:
         if batch.kernel is None:
             raise ValueError(f"geometry = '{batch.geometry}' has no elastic kernel: the array backend runs 'slab' "
                              "and 'halfspace' only")
-        if np.any(batch.params[:, P_FOLD] > 0):
-            raise ValueError("integrator = 'fold' or 'adaptive' runs on the numba CPU path only in this version (backend='cpu')")
-        if np.any(batch.params[:, P_KD] == 0.0):
-            raise ValueError("the dead weight on the slab runs on the numba CPU path only in this version (backend='cpu')")
+        why = gpu_refusal(batch)  # the capability table's GPU column is this code's
+        if why is not None:
+            raise ValueError(f"{why} (backend='cpu')")
         xp, fft = self.xp, self.fft
         b, n = batch.x.shape
         lx, ly = batch.shape

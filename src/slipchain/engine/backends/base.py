@@ -160,6 +160,16 @@ def kernel_params(system: System) -> np.ndarray:
     return p
 
 
+def gpu_refusal(batch: Batch) -> str | None:
+    """Why the GPU paths (the CUDA kernel, the array code) cannot run a batch, from its integrator and
+    drives (:func:`slipchain.model.capabilities.refusal`), or None."""
+    from ...model.capabilities import refusal
+
+    integrator = "adaptive" if batch.folds is not None else "fold" if np.any(batch.params[:, S.P_FOLD] > 0) else "fixed"
+    drives = {"dead_weight" if kd == 0.0 else "spring" for kd in batch.params[:, S.P_KD]}
+    return next((w for w in (refusal(batch.geometry, integrator, d, "gpu") for d in sorted(drives)) if w), None)
+
+
 @dataclass
 class ChunkOutput:
     out: np.ndarray  # (B, n_samples, N_OUT)
@@ -176,4 +186,4 @@ class Backend(Protocol):
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput: ...
 
 
-__all__ = ["Backend", "Batch", "ChunkOutput", "kernel_params"]
+__all__ = ["Backend", "Batch", "ChunkOutput", "gpu_refusal", "kernel_params"]

@@ -39,7 +39,7 @@ import numpy as np
 from numba import cuda, float64  # imports without a GPU; kernels compile on first launch
 
 from .. import scheme as S
-from .base import Batch, ChunkOutput
+from .base import Batch, ChunkOutput, gpu_refusal
 
 SHARED_ARRAYS = 8  # x, u, X, U and the scratch un, Un, dampx, dampX of a row, in shared memory when they fit
 SHARED_BYTES = 48 * 1024  # shared memory a block may use without opting in to more
@@ -253,7 +253,7 @@ class CUDABackend:
         return THREADS_MAX if rows <= _sm_count() else 128
 
     def advance(self, batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
-        why = _refusal(batch)
+        why = gpu_refusal(batch)
         if why is not None:
             raise ValueError(f"{why} (backend='cpu' or 'auto')")
         if batch.geometry != "chain":
@@ -290,15 +290,6 @@ class CUDABackend:
 
 
 _STATE = ("x", "u", "X", "U", "step", "params", "sites", "vstar", "n_contacts", "ysolve", "status")
-
-
-def _refusal(batch: Batch) -> str | None:
-    """Why the GPU cannot run a batch (:func:`slipchain.model.capabilities.refusal`), or None."""
-    from ...model.capabilities import refusal
-
-    integrator = "adaptive" if batch.folds is not None else "fold" if np.any(batch.params[:, S.P_FOLD] > 0) else "fixed"
-    drives = {"dead_weight" if kd == 0.0 else "spring" for kd in batch.params[:, S.P_KD]}
-    return next((w for w in (refusal(batch.geometry, integrator, d, "gpu") for d in sorted(drives)) if w), None)
 
 
 class _DeviceBuffers:
