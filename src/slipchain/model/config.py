@@ -234,7 +234,8 @@ class Config(BaseModel):
         return self
 
     def _check_geometry(self) -> None:
-        """The 2-D geometries (issue 13): Ly only off the chain, no dead weight on the continuum yet."""
+        """The geometry: Ly only off the chain (issue 13), and a combination that runs somewhere (the
+        capability table, :mod:`slipchain.model.capabilities`)."""
         if self.geometry == "chain":
             if self.Ly != 1:
                 raise ValueError(_message("Ly", self.Ly, "1 with geometry = 'chain' (a 2-D interface is geometry = "
@@ -337,11 +338,11 @@ class Config(BaseModel):
             il = 2.0 * (2.0 * self.K + 2.0 * self.K_Y + self.K_T) / self.m
             ul = 2.0 * (2.0 * self.K_L + 2.0 * self.K_LY + self.K_T) / (self.N_L * self.m) + self.K_d / (self.N_L * self.m)
             return math.sqrt(max(il, ul))
-        from .elastic import interface_kernel
+        from .elastic import config_kernel
 
         qx = math.pi / self.a if self.N > 1 else 0.0
         qy = math.pi / self.a if self.Ly > 1 else 0.0
-        k = float(interface_kernel(self.geometry, qx, qy, self.H, self.G, self.nu, self.top_stiffness))
+        k = float(config_kernel(self, qx, qy))
         return math.sqrt(self.a**2 * k / self.m)
 
     @property

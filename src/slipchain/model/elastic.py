@@ -149,6 +149,26 @@ def interface_kernel(geometry: str, qx: ArrayLike, qy: ArrayLike, H: float, G: f
     raise ValueError(f"geometry {geometry!r} has no elastic kernel (only 'slab' and 'halfspace')")
 
 
+def config_kernel(cfg, qx: ArrayLike, qy: ArrayLike) -> np.ndarray:
+    """k(qx, qy) [Pa/m] of the body of a :class:`~slipchain.model.config.Config`: its geometry, H = N_L a,
+    G, nu, and what holds its top (``Config.top_stiffness``: the drive springs, or the dead weight's
+    rigid plate)."""
+    return interface_kernel(cfg.geometry, qx, qy, cfg.H, cfg.G, cfg.nu, cfg.top_stiffness)
+
+
+def uniform_stiffness(cfg) -> float:
+    """k(0) [Pa/m]: the stiffness per area of the uniform mode of the slab, (H/G + 1/kappa_d)**-1 (G/H
+    under the dead weight: the layer's shear against the plate), or of the half-space, kappa_d (the
+    drive springs alone)."""
+    return float(config_kernel(cfg, 0.0, 0.0))
+
+
+def elastic_kernel(cfg) -> np.ndarray:
+    """a**2 k(q) [N/m] on the rfft2 grid of a config's (N, Ly) interface (slab, halfspace): the block
+    force is -IFFT[a**2 k FFT(x - v_d t)]."""
+    return cfg.a**2 * config_kernel(cfg, *wavenumbers(cfg.N, cfg.Ly, cfg.a))
+
+
 def wavenumbers(Lx: int, Ly: int, a: float) -> tuple[np.ndarray, np.ndarray]:
     """(qx, qy) on the grid of ``rfft2`` of an (Lx, Ly) periodic field of spacing a (1/m), shapes
     (Lx, Ly//2 + 1): the full axis first, the half axis last."""
@@ -169,4 +189,4 @@ def elastic_force(u: np.ndarray, X: float | np.ndarray, k_half: np.ndarray, a: f
     return -(a * a) * fft.irfft2(k_half * fft.rfft2(d), s=d.shape)
 
 
-__all__ = ["QH_HALFSPACE", "elastic_force", "interface_kernel", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]
+__all__ = ["QH_HALFSPACE", "config_kernel", "elastic_force", "elastic_kernel", "uniform_stiffness", "interface_kernel", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]

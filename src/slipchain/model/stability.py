@@ -46,7 +46,7 @@ import math
 
 import numpy as np
 
-from .elastic import interface_kernel, wavenumbers
+from .elastic import elastic_kernel, uniform_stiffness
 
 RADIUS_TOL = 1e-7  # |lambda| above 1 + this is growth (a Jordan pair at 1 is computed to ~1e-8)
 
@@ -151,7 +151,7 @@ def stable_step(cfg) -> float:
 
 def plate_mode(cfg) -> tuple[np.ndarray, np.ndarray]:
     """(B, D), shape (1, 2, 2), of the slab's uniform mode under the dead weight (module docstring)."""
-    kappa = cfg.a**2 * float(interface_kernel(cfg.geometry, 0.0, 0.0, cfg.H, cfg.G, cfg.nu, cfg.top_stiffness))
+    kappa = cfg.a**2 * uniform_stiffness(cfg)
     m, M, g = cfg.m, cfg.N_L * cfg.m, cfg.radiation_damping_rate
     B = np.array([[[kappa / m, -kappa / m], [-kappa / M, kappa / M]]])
     D = g * np.array([[[1.0, -1.0], [-m / M, m / M]]])
@@ -162,8 +162,7 @@ def slab_modes(cfg) -> tuple[np.ndarray, np.ndarray]:
     """(B, D) of the slab's or half-space's Fourier modes as (modes, 1, 1) arrays (for the generic
     eigenvalue test of the closed form); under the dead weight without the uniform mode
     (:func:`plate_mode`)."""
-    k = interface_kernel(cfg.geometry, *wavenumbers(cfg.N, cfg.Ly, cfg.a), cfg.H, cfg.G, cfg.nu, cfg.top_stiffness)
-    w2 = (cfg.a**2 * k / cfg.m).ravel()
+    w2 = (elastic_kernel(cfg) / cfg.m).ravel()
     if cfg.dead_weight is not None:
         w2 = w2[1:]
     return w2[:, None, None], np.full((w2.size, 1, 1), cfg.radiation_damping_rate)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import Config
+from .elastic import elastic_kernel, uniform_stiffness  # noqa: F401 (a config's kernels; imported from here too)
 
 
 @dataclass(frozen=True)
@@ -100,24 +101,6 @@ def mu_star_norm(system: System) -> float:
     """
     cfg = system.config
     return cfg.epsilon * cfg.f0 * (system.theta_realised if system.n_contacts else 1.0)
-
-
-def uniform_stiffness(cfg: Config) -> float:
-    """k(0) [Pa/m]: the stiffness per area of the uniform mode of the slab, (H/G + 1/kappa_d)**-1 (G/H
-    under the dead weight: the layer's shear against the plate), or of the half-space, kappa_d (the
-    drive springs alone)."""
-    from .elastic import interface_kernel
-
-    return float(interface_kernel(cfg.geometry, 0.0, 0.0, cfg.H, cfg.G, cfg.nu, cfg.top_stiffness))
-
-
-def elastic_kernel(cfg: Config) -> np.ndarray:
-    """a**2 k(q) [N/m] on the rfft2 grid of the (N, Ly) interface (slab, halfspace; :mod:`.elastic`):
-    the block force is -IFFT[a**2 k FFT(x - v_d t)]."""
-    from .elastic import interface_kernel, wavenumbers
-
-    return cfg.a**2 * interface_kernel(cfg.geometry, *wavenumbers(cfg.N, cfg.Ly, cfg.a), cfg.H, cfg.G, cfg.nu,
-                                       cfg.top_stiffness)
 
 
 @dataclass
