@@ -1,4 +1,4 @@
-"""Backends that advance a batch of realisations: ``base`` (batch layout, protocol), ``cpu`` (numba), ``spectral`` (slab FFT), ``host`` (the CPU backend), ``cuda`` (numba.cuda)."""
+"""Backends that advance a batch of realisations: ``base`` (batch layout, protocol), ``compose`` (the CPU loops composed from pieces), ``cpu``, ``adaptive``, ``spectral`` (the pieces), ``host`` (the CPU backend), ``cuda`` (numba.cuda)."""
 
 from __future__ import annotations
 

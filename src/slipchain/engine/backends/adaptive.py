@@ -5,9 +5,10 @@ about a second of reloading, during which every contact sits on its sticking bra
 chain creeps. The fold-aware contact solve (:func:`~slipchain.engine.scheme.solve_contact_fold`)
 has no step limit of its own, so the step is bounded only by the explicit springs and dampers
 (Config.dt_stable, their linear stability limit together; the largest level stays within 0.9 of
-it, issue 26). This kernel runs the scheme of
-:mod:`slipchain.engine.scheme` unchanged (the CPU's compiled parts: :mod:`.cpu`) with a step
-h = dt * 2**k, k = 0 ... ``Config.step_levels``:
+it, issue 26). The adaptive stepper (:func:`.compose.adaptive_stepper`, composed with every
+body) runs the scheme of :mod:`slipchain.engine.scheme` unchanged (the CPU's compiled parts:
+:mod:`.cpu`) with a step h = dt * 2**k, k = 0 ... ``Config.step_levels``; this module holds its
+controller's parts:
 
 * **Error estimate.** For a first-order step the local velocity error is ~ h**2/2 |du/dt'|; it is
   estimated from two consecutive steps as ``err = h/2 * max_i |a_i^n - a_i^(n-1)|`` over both
@@ -32,11 +33,8 @@ h = dt * 2**k, k = 0 ... ``Config.step_levels``:
 from __future__ import annotations
 
 import numba as nb
-import numpy as np
 
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, N_YS_STATE, P_AMP, P_ETAC, P_KLY, P_KY,
-                      P_LAT, P_LY, P_ML, Y_FA, Y_FB)
-from .cpu import _contacts, _end_sample, _explicit_step, _move, _refresh_solver, row_parameters
+from ..scheme import C_F, C_SLOW, C_U, C_U2, N_YS_STATE, Y_FA, Y_FB
 
 STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step multiplies err by ~4)
 
@@ -108,96 +106,4 @@ def _keep_acceleration(n, ur, Ur, un, Un, aprev, h):
         aprev[n + i] = (Un[i] - Ur[i]) / h
 
 
-@nb.njit(cache=True)
-def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, folds, control, n_samples, sample_steps,
-            out, acc, cacc, status):
-    """:func:`slipchain.engine.backends.cpu.advance` with the adaptive step (module docstring).
-
-    Extra inputs: folds (B, L + 1, 2, C), the contacts' folds at dt*2**k; control (B, 4): tol [m/s],
-    the highest level, and (in/out) the counts of steps taken and of steps rejected. ``step`` counts
-    base steps (dt), as with the fixed step.
-    """
-    nb_rows, n = x.shape
-    cmax = sites.shape[1]
-    un = np.empty(n)
-    Un = np.empty(n)
-    dampx = np.empty(n)
-    dampX = np.empty(n)
-    rk = np.empty(cmax)
-    ra = np.empty(cmax)
-    uk = np.empty(cmax)
-    fk = np.empty(cmax)
-    ok = np.empty(cmax, dtype=np.bool_)
-    aprev = np.empty(2 * n)
-    ysave = np.empty((N_YS_STATE, cmax))
-    for row in range(nb_rows):
-        if status[row] >= 0:
-            continue
-        K, KL, KT, Kd, m, meta, vd, fconst, dt0, _, _, _, c, _, slow = row_parameters(params[row])
-        amp = params[row, P_AMP]
-        etac = params[row, P_ETAC]
-        mL = params[row, P_ML]
-        lattice = params[row, P_LAT] > 0.0
-        ly = int(params[row, P_LY])
-        KY = params[row, P_KY]
-        KLY = params[row, P_KLY]
-        tol = control[row, 0]
-        top = int(control[row, 1])
-        nc = n_contacts[row]
-        xr = x[row]
-        ur = u[row]
-        Xr = X[row]
-        Ur = U[row]
-        ys = ysolve[row]
-        ca = cacc[row]
-        vs = vstar[row]
-        st = sites[row]
-        w_drive = 0.0
-        w_damp = 0.0
-        w_contact = 0.0
-        for s in range(n_samples):
-            _refresh_solver(nc, ys, c)
-            fd_sum = 0.0
-            j = 0
-            level = 0
-            loaded = -1
-            have = False
-            while j < sample_steps:
-                level = _grid_level(level, j, sample_steps)
-                if level != loaded:
-                    _load_folds(nc, ys, folds[row, level])
-                    loaded = level
-                w = 1 << level
-                h = dt0 * w
-                drive = vd * (step[row] * dt0)
-                fsum = _explicit_step(lattice, ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
-                                      drive, fconst, h / m, h / mL)
-                if level > 0:  # keep the contacts' solver state: the step may be rejected
-                    _copy_solver_state(nc, ys, ysave)
-                _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m * (1.0 + h * etac), h * amp, c, 1.0 / h, True)
-                err = _error(n, ur, Ur, un, Un, aprev, h) if have else 0.0
-                if level > 0 and err > tol:  # rejected (a slip event starts): again from the same state, finer
-                    _copy_solver_state(nc, ysave, ys)
-                    level = _rejected_level(level, err, tol)
-                    control[row, 3] += 1.0
-                    continue
-                _keep_acceleration(n, ur, Ur, un, Un, aprev, h)
-                w_contact -= _weighted_contact_sums(nc, fk, uk, ca, slow, w) * h
-                w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
-                w_drive += fsum * vd * h
-                fd_sum += fsum / n * w
-                step[row] += w
-                j += w
-                control[row, 2] += 1.0
-                if have and err < STEP_UP * tol and level < top:
-                    level += 1
-                have = True
-            if not _end_sample(xr, Xr, fd_sum, sample_steps, w_contact, out[row, s]):
-                status[row] = step[row]
-                break
-        acc[row, A_WDRIVE] += w_drive
-        acc[row, A_WDAMP] += w_damp
-        acc[row, A_WCONTACT] += w_contact
-
-
-__all__ = ["STEP_UP", "advance"]
+__all__ = ["STEP_UP"]

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN,
+from ..scheme import (A_WCONTACT, C_F, C_SLOW, C_U, C_U2, N_ACC, N_CACC, N_OUT, O_FD, O_XMEAN,
                       P_AMP, P_C, P_DT, P_ETAC, P_M, P_META, P_SLOW, P_VD, Y_LOG)
 from .base import Batch, ChunkOutput, gpu_refusal
 

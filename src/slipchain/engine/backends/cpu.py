@@ -1,10 +1,11 @@
-"""The CPU backend: the scheme of :mod:`slipchain.engine.scheme` compiled with numba, one core.
+"""The CPU pieces of the engine: the scheme of :mod:`slipchain.engine.scheme` compiled with numba.
 
-:func:`advance` loops over the rows of a batch and, per row, over time steps: the explicit
-update of every block (:func:`~slipchain.engine.scheme.block_update`, vectorised over the
-interior blocks), the implicit contact solve (two branch-free Newton steps for all contacts in
-:func:`newton_pass`, which vectorises; the rest in :func:`~slipchain.engine.scheme.solve_contact`),
-then the positions. Accumulates per-sample outputs, work and per-contact sums (column layout in
+The chains' body (:func:`lattice_explicit`: the explicit update of every block by
+:func:`~slipchain.engine.scheme.block_update`, vectorised over the interior blocks;
+:func:`lattice_commit`: the positions), the contacts (:func:`_contacts`: two branch-free Newton
+steps for all contacts in :func:`newton_pass`, which vectorises, the rest in
+:func:`~slipchain.engine.scheme.solve_contact` or its fold-aware version), the per-contact sums and
+a sample's end. :mod:`.compose` composes them with a stepper into the loops (column layout in
 :mod:`slipchain.engine.scheme`).
 """
 
@@ -13,11 +14,10 @@ from __future__ import annotations
 import math
 
 import numba as nb
-import numpy as np
 
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, N_ACC, N_CACC, N_OUT,
-                      NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_FOLD, P_KLY, P_KY, P_LAT, P_LY, TAYLOR_MAX, Y_FA, Y_FB, Y_LOG, Y_P, Y_Q,
-                      compile_for)
+from ..scheme import (C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, NEWTON_TOL, O_FD, O_XMEAN, O_XUMEAN, P_FCONST, P_K, P_KD,
+                      P_KL, P_KLY, P_KT, P_KY, P_LAT, P_LY, P_M, P_META, P_ML, P_VD, TAYLOR_MAX, Y_FA, Y_FB, Y_LOG, Y_P,
+                      Y_Q, compile_for)
 
 _scheme = compile_for(lambda name, inline: nb.njit(cache=True, inline="always" if inline else "never"))
 exp_taylor = _scheme.exp_taylor
@@ -158,15 +158,25 @@ def _contact_sums(nc, fk, uk, ca, slow):
     return p
 
 
-@nb.njit(cache=True)
-def _explicit_step(lattice, ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive, fconst,
-                   dtm, dtmL):
-    """Steps 1-2 of the scheme for one row: :func:`_explicit_forces_2d` on the lattice of 'chain2d',
-    else :func:`_explicit_forces`; returns the sum of drive forces."""
-    if lattice:
-        return _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive,
-                                   fconst, dtm, dtmL)
-    return _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL)
+@nb.njit(cache=True, inline="always")
+def lattice_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+    """The chains' body, explicit part (:mod:`.compose`; scheme, steps 1-2) for one row with
+    parameters ``p``, a step h at drive time t: :func:`_explicit_forces_2d` on the lattice of
+    'chain2d', else :func:`_explicit_forces`; returns the sum of drive forces. (``Fr``, ``k0``:
+    nothing from outside the kernel.)"""
+    m = p[P_M]
+    drive = p[P_VD] * t
+    if p[P_LAT] > 0.0:
+        return _explicit_forces_2d(int(p[P_LY]), xr, ur, Xr, Ur, un, Un, dampx, dampX, p[P_K], p[P_KL], p[P_KT],
+                                   p[P_KD], p[P_KY], p[P_KLY], p[P_META], drive, p[P_FCONST], h / m, h / p[P_ML])
+    return _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, p[P_K], p[P_KL], p[P_KT], p[P_KD], p[P_META], drive,
+                            p[P_FCONST], h / m, h / p[P_ML])
+
+
+@nb.njit(cache=True, inline="always")
+def lattice_commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """The chains' body, commit (:mod:`.compose`; scheme, step 4): :func:`_move`."""
+    return _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
 
 
 @nb.njit(cache=True)
@@ -185,70 +195,4 @@ def _end_sample(xr, Xr, fd_sum, sample_steps, w_contact, out_s):
     return math.isfinite(fd_sum) and math.isfinite(xs) and math.isfinite(w_contact)
 
 
-@nb.njit(cache=True)
-def advance(x, u, X, U, step, params, sites, vstar, n_contacts, ysolve, n_samples, sample_steps,
-            out, acc, cacc, status):
-    """Advance every row b of the batch by n_samples*sample_steps steps (scheme: module docstring).
-
-    In/out: x, u, X, U (B, N); step (B,) int64 steps taken; ysolve (B, N_YS, C) contact solver
-    warm starts. Inputs: params (B, P); sites, vstar (B, C); n_contacts (B,).
-    Outputs (accumulated, zero them to restart): out (B, n_samples, N_OUT) per-sample values;
-    acc (B, N_ACC) work sums [J]; cacc (B, N_CACC, C) per-contact sums over steps.
-    status (B,): -1 while finite; set to the step at which a non-finite value appeared (the row
-    then stops advancing).
-    """
-    nb_rows, n = x.shape
-    cmax = sites.shape[1]
-    un = np.empty(n)
-    Un = np.empty(n)
-    dampx = np.empty(n)
-    dampX = np.empty(n)
-    rk = np.empty(cmax)
-    ra = np.empty(cmax)
-    uk = np.empty(cmax)
-    fk = np.empty(cmax)
-    ok = np.empty(cmax, dtype=np.bool_)
-    for row in range(nb_rows):
-        if status[row] >= 0:
-            continue
-        K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = row_parameters(params[row])
-        lattice = params[row, P_LAT] > 0.0
-        fold = params[row, P_FOLD] > 0.0
-        ly = int(params[row, P_LY])
-        KY = params[row, P_KY]
-        KLY = params[row, P_KLY]
-        inv_dt = 1.0 / dt
-        nc = n_contacts[row]
-        xr = x[row]
-        ur = u[row]
-        Xr = X[row]
-        Ur = U[row]
-        ys = ysolve[row]
-        ca = cacc[row]
-        vs = vstar[row]
-        st = sites[row]
-        w_drive = 0.0
-        w_damp = 0.0
-        w_contact = 0.0
-        for s in range(n_samples):
-            _refresh_solver(nc, ys, c)
-            fd_sum = 0.0
-            for _ in range(sample_steps):
-                drive = vd * (step[row] * dt)
-                fsum = _explicit_step(lattice, ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
-                                      drive, fconst, dtm, dtmL)
-                _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt, fold)
-                w_contact -= _contact_sums(nc, fk, uk, ca, slow) * dt
-                w_damp += _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
-                w_drive += fsum * vd * dt
-                fd_sum += fsum / n
-                step[row] += 1
-            if not _end_sample(xr, Xr, fd_sum, sample_steps, w_contact, out[row, s]):
-                status[row] = step[row]
-                break
-        acc[row, A_WDRIVE] += w_drive
-        acc[row, A_WDAMP] += w_damp
-        acc[row, A_WCONTACT] += w_contact
-
-
-__all__ = ["advance", "block_update", "newton_pass", "solve_contact", "solve_contact_bracketed"]
+__all__ = ["block_update", "lattice_commit", "lattice_explicit", "newton_pass", "solve_contact", "solve_contact_bracketed"]

@@ -1,0 +1,306 @@
+"""The CPU engine composed from pieces (issue 26): each piece written once, composed once per
+combination into compiled loops.
+
+The pieces, each a numba function with a fixed signature (so that any geometry goes with any
+stepper, contact solver and drive):
+
+* **Body** (geometry with today's material: the springs or the elastic kernel, the pair or
+  radiation damping, and the drive acting on it): ``explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un,
+  dampx, dampX, h, t) -> drive force sum`` writes every block's new velocity before the contacts
+  (steps 1-2 of :mod:`slipchain.engine.scheme`) and the damping forces; ``commit(p, xr, ur, Xr, Ur,
+  un, Un, dampx, dampX, h) -> damping work`` moves the positions by the accepted velocities (step 4).
+  ``p`` is the row of the (B, P) parameter array, ``Fr`` the body's force from outside the kernel
+  (the slab's FFT; empty for the chains), ``k0`` its uniform stiffness, ``t`` the drive's time.
+  Two bodies: :data:`LATTICE` (chain, chain2d: :func:`.cpu.lattice_explicit`, :func:`.cpu.lattice_commit`)
+  and :data:`SPECTRAL` (slab, half-space: :func:`.spectral.body_explicit`, :func:`.spectral.body_commit`).
+  The drive (spring or dead weight) is part of the body's parameters: K_d and F_b on the chains'
+  upper layer, the plate of the slab's clamped top (:mod:`.spectral`).
+* **Contacts**: :func:`.cpu._contacts`, the implicit solve of every contact block, with the
+  fixed-step or the fold-aware solver (the row's P_FOLD).
+* **Stepper**: one accepted step of one row, ``step(p, Fr, k0, xr, ur, Xr, Ur, sites, vstar,
+  n_contacts, ysolve, folds, control, ctl, aprev, cacc, j, step, sample_steps, rc, *scratch) ->
+  (base steps taken, its f_d contribution, contact work, damping work, drive work)``, every array
+  the row's, ``j`` the base steps done in the output sample, ``step`` those done in the run, ``rc``
+  the row's constants (:func:`~slipchain.engine.scheme.row_parameters`):
+  :func:`fixed_stepper` (``fixed``, ``fold``: the step dt) or :func:`adaptive_stepper`
+  (``adaptive``: a trial step of length dt 2**k with its error estimate, then commit, or restore
+  and retry finer; :mod:`.adaptive`). Each calls the body's explicit part, the contacts, and the
+  body's commit; the driver adds up. ``ctl`` (4,) holds the adaptive step's place in its output
+  sample (base steps done, level, level whose folds are loaded, whether an estimate exists),
+  which every sample starts afresh, so that checkpoints resume bit for bit.
+* **Driver**: the loop over rows, samples and steps. :func:`kernel_driver` runs a whole chunk of a
+  row in one compiled call (the chains: the body needs nothing from outside); the slab's body needs
+  one FFT of every row per step, so its driver (:func:`fft_advance`) alternates the FFT with
+  :func:`rows_driver`, one step of every live row.
+
+:func:`loop` gives the compiled loop of a (geometry, integrator) combination, composed on first use
+(numba caches each on disk: a closure over compiled pieces is cached like a function). The
+capability table (:mod:`slipchain.model.capabilities`) says which combinations run where; on the
+CPU every one does. A new material (issue 28) is a new body, a new stepper (issue 27) a new
+stepper: neither touches the loops.
+
+Bit for bit: the chains' pieces are compiled as the loops they replace were (the stepper without
+fastmath), the slab's explicit part and commit with fastmath as its fixed-step loop was.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numba as nb
+import numpy as np
+
+from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_ETAC,
+                      P_FOLD, P_KD)
+from . import spectral
+from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
+                       _rejected_level, _weighted_contact_sums)
+from .base import Batch, ChunkOutput
+from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice_commit, lattice_explicit, row_parameters
+
+# ctl columns: the row's place in its output sample
+CT_J, CT_LEVEL, CT_LOADED, CT_HAVE = range(4)
+
+
+def fixed_stepper(explicit, commit, fastmath: bool):
+    """The fixed step (integrators 'fixed', 'fold') of one row, composed with a body; compiled with
+    the body's loop flags (``fastmath``: the slab's loop was)."""
+    flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
+
+    @nb.njit(cache=True, inline="always", **flags)
+    def step(p, Fr, k0, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc, un, Un,
+             dampx, dampX, rk, ra, uk, fk, ok, ysave):
+        K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = rc
+        fsum = explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt, nstep * dt)
+        _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, 1.0 / dt, p[P_FOLD] > 0.0)
+        w_contact = _contact_sums(nc, fk, uk, ca, slow) * dt
+        w_damp = commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
+        return 1, fsum / xr.size, w_contact, w_damp, fsum * vd * dt
+
+    return step
+
+
+def adaptive_stepper(explicit, commit):
+    """One accepted adaptive step of one row (:mod:`.adaptive`: levels h = dt 2**k on the fixed
+    step's time grid, the error from consecutive accelerations, rejection and restore), composed
+    with a body."""
+
+    @nb.njit(cache=True, inline="always")
+    def step(p, Fr, k0, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc, un, Un,
+             dampx, dampX, rk, ra, uk, fk, ok, ysave):
+        K, KL, KT, Kd, m, meta, vd, fconst, dt0, _, _, _, c, _, slow = rc
+        amp = p[P_AMP]
+        etac = p[P_ETAC]
+        tol = ctrl[0]
+        top = int(ctrl[1])
+        n = xr.size
+        while True:
+            lv = _grid_level(cr[CT_LEVEL], j, sample_steps)
+            if lv != cr[CT_LOADED]:
+                _load_folds(nc, ys, fr[lv])
+                cr[CT_LOADED] = lv
+            w = 1 << lv
+            h = dt0 * w
+            fsum = explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, nstep * dt0)
+            if lv > 0:  # keep the contacts' solver state: the step may be rejected
+                _copy_solver_state(nc, ys, ysave)
+            _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m * (1.0 + h * etac), h * amp, c, 1.0 / h, True)
+            err = _error(n, ur, Ur, un, Un, ap, h) if cr[CT_HAVE] > 0 else 0.0
+            if lv > 0 and err > tol:  # rejected (a slip event starts): again from the same state, finer
+                _copy_solver_state(nc, ysave, ys)
+                cr[CT_LEVEL] = _rejected_level(lv, err, tol)
+                ctrl[3] += 1.0
+                continue
+            _keep_acceleration(n, ur, Ur, un, Un, ap, h)
+            w_contact = _weighted_contact_sums(nc, fk, uk, ca, slow, w) * h
+            w_damp = commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+            ctrl[2] += 1.0
+            if cr[CT_HAVE] > 0 and err < STEP_UP * tol and lv < top:
+                lv += 1
+            cr[CT_LEVEL] = lv
+            cr[CT_HAVE] = 1
+            return w, fsum / n * w, w_contact, w_damp, fsum * vd * h
+
+    return step
+
+
+@nb.njit(cache=True)
+def scratch_arrays(n, cmax):
+    """The per-step work arrays of a stepper (one row at a time): new velocities and damping forces
+    of both layers, the contacts' right-hand sides, velocities, forces, acceptance flags, and the
+    solver state kept for a step that may be rejected."""
+    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(cmax), np.empty(cmax), np.empty(cmax),
+            np.empty(cmax), np.empty(cmax, dtype=np.bool_), np.empty((N_YS_STATE, cmax)))
+
+
+@nb.njit(cache=True)
+def start_sample(row, n_contacts, ysolve, params, fd, ctl):
+    """A row at the start of an output sample: exact 10**y, exp(-c y^2) for its contacts, no f_d
+    yet, level 0 with no error estimate (so that a chunk boundary changes nothing)."""
+    _refresh_solver(n_contacts[row], ysolve[row], params[row, P_C])
+    fd[row] = 0.0
+    ctl[row, CT_J] = 0
+    ctl[row, CT_LEVEL] = 0
+    ctl[row, CT_LOADED] = -1
+    ctl[row, CT_HAVE] = 0
+
+
+def kernel_driver(stepper):
+    """The whole chunk in one compiled call, row after row (a body that needs nothing from outside
+    the kernel: the chains)."""
+
+    @nb.njit(cache=True)
+    def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, n_samples, sample_steps,
+                out, acc, cacc, status):
+        nb_rows, n = x.shape
+        cmax = sites.shape[1]
+        # the work arrays of :func:`scratch_arrays`, allocated here: measured 1-2 % faster
+        un, Un, dampx, dampX = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        rk, ra, uk, fk = np.empty(cmax), np.empty(cmax), np.empty(cmax), np.empty(cmax)
+        ok = np.empty(cmax, dtype=np.bool_)
+        ysave = np.empty((N_YS_STATE, cmax))
+        Fr = np.zeros(0)
+        fd = np.zeros(nb_rows)
+        ctl = np.zeros((nb_rows, 4), dtype=np.int64)
+        ap = np.zeros(2 * n)
+        for row in range(nb_rows):
+            if status[row] >= 0:
+                continue
+            p, xr, ur, Xr, Ur, st, vs = params[row], x[row], u[row], X[row], U[row], sites[row], vstar[row]
+            nc = n_contacts[row]
+            ys, fr, ctrl, cr, ca = ysolve[row], folds[row], control[row], ctl[row], cacc[row]
+            rc = row_parameters(p)
+            w_drive = 0.0
+            w_damp = 0.0
+            w_contact = 0.0
+            for s in range(n_samples):
+                start_sample(row, n_contacts, ysolve, params, fd, ctl)
+                fds = 0.0
+                j = 0
+                for _ in range(sample_steps):  # every step takes at least one base step (a counted loop: faster)
+                    if j >= sample_steps:
+                        break
+                    w, dfd, dwc, dwd, dwdr = stepper(p, Fr, 0.0, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j,
+                                                     steps[row], sample_steps, rc, un, Un, dampx, dampX, rk, ra, uk,
+                                                     fk, ok, ysave)
+                    w_contact -= dwc
+                    w_damp += dwd
+                    w_drive += dwdr
+                    fds += dfd
+                    steps[row] += w
+                    j += w
+                if not _end_sample(xr, Xr, fds, sample_steps, w_contact, out[row, s]):
+                    status[row] = steps[row]
+                    break
+            acc[row, A_WDRIVE] += w_drive
+            acc[row, A_WDAMP] += w_damp
+            acc[row, A_WCONTACT] += w_contact
+
+    return advance
+
+
+def rows_driver(stepper, fastmath: bool):
+    """One step of every live row whose sample is not complete, given the body's outside force ``F``
+    of every row (the slab's FFT driver calls it once per FFT); compiled with the stepper's flags
+    (it is inlined here)."""
+    flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
+
+    @nb.njit(cache=True, **flags)
+    def step_rows(F, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, ctl, aprev,
+                  cacc, acc, fd, sample_steps, status, scratch):
+        un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave = scratch
+        for row in range(x.shape[0]):
+            if status[row] >= 0 or ctl[row, CT_J] >= sample_steps:
+                continue
+            w, dfd, dwc, dwd, dwdr = stepper(params[row], F[row], k0[row], x[row], u[row], X[row], U[row], sites[row],
+                                             vstar[row], n_contacts[row], ysolve[row], folds[row], control[row],
+                                             ctl[row], aprev[row], cacc[row], ctl[row, CT_J], steps[row], sample_steps,
+                                             row_parameters(params[row]), un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave)
+            acc[row, A_WCONTACT] -= dwc
+            acc[row, A_WDAMP] += dwd
+            acc[row, A_WDRIVE] += dwdr
+            fd[row] += dfd
+            steps[row] += w
+            ctl[row, CT_J] += w
+
+    return step_rows
+
+
+def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
+    """Advance every live row of a slab/half-space batch by n_samples*sample_steps steps
+    (module docstring): per step one batched FFT, then one step of every live row by the composed
+    loop (:func:`loop`, the fixed or the adaptive stepper with this body); ``fft`` the FFT
+    module (scipy.fft by default). With the adaptive step the rows advance in lock-step, one
+    accepted step per FFT (a rejected step is retried at once: the positions, hence the elastic
+    force, have not moved)."""
+    if fft is None:
+        import scipy.fft as fft
+    b, n = batch.x.shape
+    lx, ly = batch.shape
+    kern = batch.kernel
+    k0 = np.ascontiguousarray(kern[:, 0, 0])
+    neg = -kern
+    out = np.zeros((b, n_samples, N_OUT))
+    acc = np.zeros((b, N_ACC))
+    cmax = batch.sites.shape[1]
+    cacc = np.zeros((b, N_CACC, cmax))
+    fd = np.zeros(b)
+    dead = bool(np.any(batch.params[:, P_KD] == 0.0))  # dead-weight rows: the body acts on x - X
+    grid = batch.x.reshape(b, lx, ly)  # a view: the FFT reads the state in place
+
+    def force():
+        spec = fft.rfft2(grid if not dead else (batch.x - batch.X).reshape(b, lx, ly), axes=(1, 2))
+        spec *= neg
+        return fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(b, n)
+
+    adaptive = batch.folds is not None
+    step_rows = loop(batch.geometry, adaptive)
+    folds = batch.folds if adaptive else np.zeros((b, 1, 2, cmax))
+    control = batch.step_control if adaptive else np.zeros((b, 4))
+    ctl = np.zeros((b, 4), dtype=np.int64)
+    aprev = np.zeros((b, 2 * n))
+    scratch = scratch_arrays(n, cmax)
+    for s in range(n_samples):
+        for row in np.flatnonzero(batch.status < 0):  # every sample starts afresh (checkpoints resume bit for bit)
+            start_sample(row, batch.n_contacts, batch.ysolve, batch.params, fd, ctl)
+        # every accepted step takes at least one base step: sample_steps FFTs at most (the fixed step: exactly)
+        for _ in range(sample_steps):
+            if adaptive and not np.any((batch.status < 0) & (ctl[:, CT_J] < sample_steps)):
+                break
+            step_rows(force(), k0, batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites,
+                      batch.vstar, batch.n_contacts, batch.ysolve, folds, control, ctl, aprev, cacc, acc, fd,
+                      sample_steps, batch.status, scratch)
+        spectral.end_sample(batch.x, batch.X, batch.status, batch.step, fd, out, s, sample_steps, acc)
+    return ChunkOutput(out, acc, cacc)
+
+
+
+LATTICE = (lattice_explicit, lattice_commit, False)  # chain, chain2d: (explicit, commit, fastmath of its fixed loop)
+BODIES = {"chain": "lattice", "chain2d": "lattice", "slab": "spectral", "halfspace": "spectral"}
+
+
+def _body(name: str):
+    return LATTICE if name == "lattice" else spectral.BODY
+
+
+@functools.cache
+def stepper(body: str, adaptive: bool):
+    """The stepper of :func:`fixed_stepper` or :func:`adaptive_stepper` composed with a body
+    ('lattice' or 'spectral')."""
+    explicit, commit, fastmath = _body(body)
+    return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
+
+
+@functools.cache
+def loop(geometry: str, adaptive: bool):
+    """The compiled loop of one combination: for the chains the whole-chunk kernel
+    (:func:`kernel_driver`), for the slab and half-space the per-step function of its FFT driver
+    (:func:`rows_driver`). Integrators 'fixed' and 'fold' share the fixed stepper (the fold-aware
+    contact solve is the row's P_FOLD); the drive is the body's."""
+    body = BODIES[geometry]
+    step = stepper(body, adaptive)
+    return kernel_driver(step) if body == "lattice" else rows_driver(step, _body(body)[2] and not adaptive)
+
+
+__all__ = ["BODIES", "adaptive_stepper", "fft_advance", "fixed_stepper", "kernel_driver", "loop", "rows_driver",
+           "start_sample", "stepper"]
