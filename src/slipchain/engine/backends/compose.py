@@ -291,13 +291,17 @@ def stepper(body: str, adaptive: bool):
     return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
 
 
-@functools.cache
 def loop(geometry: str, adaptive: bool):
     """The compiled loop of one combination: for the chains the whole-chunk kernel
     (:func:`kernel_driver`), for the slab and half-space the per-step function of its FFT driver
-    (:func:`rows_driver`). Integrators 'fixed' and 'fold' share the fixed stepper (the fold-aware
-    contact solve is the row's P_FOLD); the drive is the body's."""
-    body = BODIES[geometry]
+    (:func:`rows_driver`). One per body and stepper, shared by the geometries of a body; integrators
+    'fixed' and 'fold' share the fixed stepper (the fold-aware contact solve is the row's P_FOLD);
+    the drive is the body's."""
+    return _loop(BODIES[geometry], adaptive)
+
+
+@functools.cache
+def _loop(body: str, adaptive: bool):
     step = stepper(body, adaptive)
     return kernel_driver(step) if body == "lattice" else rows_driver(step, _body(body)[2] and not adaptive)
 
