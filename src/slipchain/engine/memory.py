@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Iterable
 
 from ..model.config import Config, ConfigError
+from ..model.geometries import geometry_of
 from . import scheme as S
 from .control import CHUNK_TIME, chunk_time
 
@@ -63,7 +64,7 @@ def estimate_bytes(cfg: Config) -> int:
     chunks = int(t / max(chunk_time(cfg), cfg.output_interval)) + 1
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
-    per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if cfg.geometry in ("slab", "halfspace") else 0)
+    per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if geometry_of(cfg).spectral else 0)
     per_contact = BYTES_PER_CONTACT
     if cfg.integrator == "adaptive":  # the previous accelerations of both layers; each level's folds, the saved solver state
         per_block += 16

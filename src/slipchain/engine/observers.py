@@ -16,6 +16,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ..model.geometries import GEOMETRIES
 from ..results.schema import Recording
 from . import scheme as S
 from .backends.base import Batch, ChunkOutput
@@ -88,7 +89,7 @@ class FieldRecorder:
         self.u[k] = uk
         if self.x is not None:
             self.x[k] = batch.x[self.row] - cfg.v_d * self.t[k]
-        if batch.kernel is not None:  # slab, half-space: the uniform mode of the elastic force
+        if GEOMETRIES[batch.geometry].spectral:  # slab, half-space: the uniform mode of the elastic force
             self.f_d[k] = batch.kernel[self.row, 0, 0] * (cfg.v_d * self.t[k] - batch.x[self.row].mean())
         else:
             self.f_d[k] = cfg.K_d * (cfg.v_d * self.t[k] - batch.X[self.row].mean())

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import itertools
 
-GEOMETRIES = ("chain", "chain2d", "slab", "halfspace")
+from .geometries import GEOMETRIES as _GEOMETRIES
+
+GEOMETRIES = tuple(_GEOMETRIES)
 INTEGRATORS = ("fixed", "fold", "adaptive")
 DRIVES = ("spring", "dead_weight")
 BACKENDS = ("cpu", "gpu")
@@ -29,7 +31,7 @@ def drive_of(cfg) -> str:
 
 def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu") -> str | None:
     """None where the combination runs, else why not (a sentence for an error message)."""
-    if geometry == "halfspace" and drive == "dead_weight":
+    if drive == "dead_weight" and not _GEOMETRIES[geometry].top:
         return "a half-space has no top to carry the weight (use geometry = 'slab')"
     if backend == "cpu":
         return None
@@ -37,7 +39,7 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu") ->
         return f"integrator = '{integrator}' runs on the CPU only in this version (the GPU paths have the fixed step)"
     if geometry == "chain2d":
         return "geometry = 'chain2d' runs on the CPU only in this version (the GPU kernel is the chain's)"
-    if geometry in ("slab", "halfspace") and drive == "dead_weight":
+    if _GEOMETRIES[geometry].spectral and drive == "dead_weight":
         return ("the dead weight on the slab runs on the CPU only in this version (the GPU's array code has no "
                 "plate)")
     return None

@@ -15,6 +15,7 @@ from typing import Any, Literal, Mapping, Sequence
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
 
 from .contact_law import ContactLaw
+from .geometries import geometry_of
 
 # What each key accepts, in words; used in every error message.
 ALLOWED: dict[str, str] = {
@@ -236,7 +237,7 @@ class Config(BaseModel):
     def _check_geometry(self) -> None:
         """The geometry: Ly only off the chain (issue 13), and a combination that runs somewhere (the
         capability table, :mod:`slipchain.model.capabilities`)."""
-        if self.geometry == "chain":
+        if not geometry_of(self).two_d:
             if self.Ly != 1:
                 raise ValueError(_message("Ly", self.Ly, "1 with geometry = 'chain' (a 2-D interface is geometry = "
                                           "'chain2d', 'slab' or 'halfspace')"))
@@ -334,7 +335,7 @@ class Config(BaseModel):
     def omega_max(self) -> float:
         """Upper bound of the undamped angular frequencies [1/s] (Gershgorin for the chains; for the
         slab and half-space a**2 max k / m, k at the largest |q| of the grid, where k is largest)."""
-        if self.geometry in ("chain", "chain2d"):
+        if geometry_of(self).body == "lattice":
             il = 2.0 * (2.0 * self.K + 2.0 * self.K_Y + self.K_T) / self.m
             ul = 2.0 * (2.0 * self.K_L + 2.0 * self.K_LY + self.K_T) / (self.N_L * self.m) + self.K_d / (self.N_L * self.m)
             return math.sqrt(max(il, ul))
@@ -348,7 +349,7 @@ class Config(BaseModel):
     @property
     def K_Y(self) -> float:
         """IL spring along y, K_Y = G*a [N/m] (chain2d; 0 for the other geometries)."""
-        return self.G * self.a if self.geometry == "chain2d" else 0.0
+        return self.G * self.a if geometry_of(self).body == "lattice" and geometry_of(self).two_d else 0.0
 
     @property
     def K_LY(self) -> float:

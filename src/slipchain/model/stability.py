@@ -47,6 +47,7 @@ import math
 import numpy as np
 
 from .elastic import elastic_kernel, uniform_stiffness
+from .geometries import geometry_of
 
 RADIUS_TOL = 1e-7  # |lambda| above 1 + this is growth (a Jordan pair at 1 is computed to ~1e-8)
 
@@ -137,7 +138,7 @@ def _chain_stable_step(*args: float) -> float:
 def stable_step(cfg) -> float:
     """The largest stable step dt [s] of ``cfg``'s geometry and drive (module docstring); the
     scheme is stable for every dt below it."""
-    if cfg.geometry in ("chain", "chain2d"):
+    if geometry_of(cfg).body == "lattice":
         K_d = 0.0 if cfg.dead_weight is not None else cfg.K_d
         return _chain_stable_step(cfg.N, cfg.Ly, cfg.m, cfg.N_L, cfg.K, cfg.K_L, cfg.K_T, K_d, cfg.K_Y, cfg.K_LY,
                                   cfg.eta)

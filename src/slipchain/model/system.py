@@ -20,6 +20,7 @@ import numpy as np
 
 from .config import Config
 from .elastic import elastic_kernel, uniform_stiffness  # noqa: F401 (a config's kernels; imported from here too)
+from .geometries import geometry_of
 
 
 @dataclass(frozen=True)
@@ -133,7 +134,7 @@ def initial_state(system: System) -> State:
         zeros = np.zeros(n)
         return State(zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy(), 0)
     force = system.steady_friction_per_block()
-    if cfg.geometry in ("slab", "halfspace"):
+    if geometry_of(cfg).spectral:
         zeros = np.zeros(n)
         plate = np.full(n, cfg.v_d) if cfg.dead_weight is not None else zeros.copy()
         return State(np.full(n, -force / (cfg.a**2 * uniform_stiffness(cfg))), np.full(n, cfg.v_d), zeros.copy(),

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.system import State, System
+from ..model.geometries import geometry_of
 
 ENERGY_RTOL = 2e-3
 DISPLACEMENT_RTOL = 0.1
@@ -27,13 +28,13 @@ def stored_energy(system: System, state: State) -> float:
     x, u, X, U = state.x, state.u, state.X, state.U
     drive = cfg.v_d * state.step * cfg.dt
     kinetic = 0.5 * cfg.m * np.sum(u * u) + 0.5 * cfg.N_L * cfg.m * np.sum(U * U)
-    if cfg.geometry in ("slab", "halfspace"):  # the quasi-static body: (1/2) sum (x - d) . (-F_el)
+    if geometry_of(cfg).spectral:  # the quasi-static body: (1/2) sum (x - d) . (-F_el)
         from ..model.elastic import elastic_force
         from ..model.system import elastic_kernel
 
         d = (x - (X if cfg.dead_weight is not None else drive)).reshape(cfg.N, cfg.Ly)  # X: the plate
         return float(kinetic - 0.5 * np.sum(d * elastic_force(d, 0.0, elastic_kernel(cfg), 1.0)))
-    if cfg.geometry == "chain2d":  # the (Lx, Ly) lattice, row-major (model.system)
+    if geometry_of(cfg).two_d:  # chain2d: the (Lx, Ly) lattice, row-major (model.system)
         g = (cfg.N, cfg.Ly)
         xg, Xg = x.reshape(g), X.reshape(g)
         elastic = sum(0.5 * k * np.sum((np.roll(f, -1, axis=ax) - f) ** 2)

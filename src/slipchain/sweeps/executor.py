@@ -53,6 +53,7 @@ from ..engine.checkpoint import CheckpointError
 from ..engine.memory import check_memory
 from ..engine.simulate import simulate_batch
 from ..model.config import Config
+from ..model.geometries import geometry_of
 from ..model.system import build_system
 from ..results.schema import Status
 from .definition import Member, SweepDefinition
@@ -114,7 +115,7 @@ def expected_cost(member: Member) -> float:
     """Relative run time: blocks times contacts per block (plus the FFT's share for the slab and
     half-space, about as much again), times steps per simulated second."""
     c = member.config
-    fft = 0.3 if c.geometry in ("slab", "halfspace") else 0.0
+    fft = 0.3 if geometry_of(c).spectral else 0.0
     return c.n_blocks * (c.theta + 0.05 + fft) * (2e-8 / c.dt)
 
 

@@ -14,6 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from ...model.system import State, System, dead_weight_force, elastic_kernel
+from ...model.geometries import geometry_of
 from ...results.observables import SLOW_FRACTION
 from .. import scheme as S
 
@@ -115,7 +116,7 @@ class Batch:
 def _kernels(systems: list[System]) -> np.ndarray | None:
     """a**2 k(q) per row for the slab and half-space (None for the chains); rows with equal
     elastic parameters share one computation."""
-    if systems[0].config.geometry not in ("slab", "halfspace"):
+    if not geometry_of(systems[0].config).spectral:
         return None
     cache: dict[tuple, np.ndarray] = {}
     rows = []
@@ -147,11 +148,11 @@ def kernel_params(system: System) -> np.ndarray:
     p[S.P_SLOW] = SLOW_FRACTION * cfg.v_d
     p[S.P_LY] = cfg.Ly
     p[S.P_FOLD] = 0.0 if cfg.integrator == "fixed" else 1.0  # fold-aware contacts: fold, adaptive
-    if cfg.geometry == "chain2d":
+    if geometry_of(cfg).body == "lattice" and geometry_of(cfg).two_d:  # chain2d
         p[S.P_LAT] = 1.0
         p[S.P_KY] = cfg.K_Y
         p[S.P_KLY] = cfg.K_LY
-    elif cfg.geometry in ("slab", "halfspace"):  # no upper layer: the kernel couples; radiation damping
+    elif geometry_of(cfg).spectral:  # no upper layer: the kernel couples; radiation damping
         p[S.P_KL] = p[S.P_KT] = 0.0
         p[S.P_META] = cfg.m * cfg.radiation_damping_rate
     if cfg.dead_weight is not None:  # constant force per upper block instead of the drive springs

@@ -50,6 +50,7 @@ import functools
 import numba as nb
 import numpy as np
 
+from ...model.geometries import GEOMETRIES
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_ETAC,
                       P_FOLD, P_KD)
 from . import spectral
@@ -276,7 +277,7 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
 
 
 LATTICE = (lattice_explicit, lattice_commit, False)  # chain, chain2d: (explicit, commit, fastmath of its fixed loop)
-BODIES = {"chain": "lattice", "chain2d": "lattice", "slab": "spectral", "halfspace": "spectral"}
+BODIES = {name: g.body for name, g in GEOMETRIES.items()}  # model.geometries
 
 
 def _body(name: str):
