@@ -15,55 +15,36 @@ replace, side by side in one run (alternating processes, each with its own fresh
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
-CHILD = r"""
+from bench_default import child  # the same side-by-side child process; its "kernel" is the chain's timing
+
+SLAB = r"""
 import json, sys, time
+import slipchain as sc
 from slipchain import build_system, initial_state, make_config
 from slipchain.engine.backends import Batch
 from slipchain.engine.backends.host import CPUBackend
 what, repeat = sys.argv[1], int(sys.argv[2])
-out = {}
-if what == "kernel":
-    cfg = make_config(N=301, theta=0.5, eta_c=1e5, start="steady", integrator="fixed", dt=2e-8)
-    per = 2 * cfg.N
-    samples = 200
-else:
-    integ = dict(integrator="fixed") if what == "slab-fixed" else {}
-    cfg = make_config(geometry="slab", N=64, Ly=64, theta=0.5, start="steady", seed=1, **integ)
-    per = 1e3  # us per base step
-    samples = 10
+integ = dict(integrator="fixed") if what == "slab-fixed" else {}
+cfg = make_config(geometry="slab", N=64, Ly=64, theta=0.5, start="steady", seed=1, **integ)
 s = build_system(cfg)
 b = Batch.pack([s], [initial_state(s)])
 cpu = CPUBackend()
-steps = cfg.sample_steps
+samples, steps = 10, cfg.sample_steps
 cpu.advance(b, samples, steps)  # compile and warm up
 times = []
 for _ in range(repeat):
     t = time.perf_counter()
     cpu.advance(b, samples, steps)
-    times.append((time.perf_counter() - t) / (samples * steps * per) * 1e9)
-out["t"] = times
-if what != "kernel":
-    import slipchain as sc
-    ds = sc.run(dict(geometry="slab", N=64, Ly=64, theta=0.5, start="steady", seed=1, t_total=0.004, **integ))
-    out["mu_star"] = float(ds.attrs["mu_star"])
-print(json.dumps(out))
+    times.append((time.perf_counter() - t) / (samples * steps) * 1e6)
+ds = sc.run(dict(geometry="slab", N=64, Ly=64, theta=0.5, start="steady", seed=1, t_total=0.004, **integ))
+print(json.dumps({"us": times, "mu_star": float(ds.attrs["mu_star"])}))
 """
-
-
-def child(src: Path, what: str, repeat: int, cache: str) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(src / "src"), "NUMBA_CACHE_DIR": cache}
-    proc = subprocess.run([sys.executable, "-c", CHILD, what, str(repeat)], env=env, capture_output=True, text=True,
-                          check=True)
-    return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
@@ -86,8 +67,9 @@ def main() -> None:
         t: dict[str, list[float]] = {"old": [], "new": []}
         for _ in range(args.rounds):
             for name, src in (("old", args.old), ("new", here)):
-                r = child(src, what, args.repeat, caches[name])
-                t[name] += r["t"]
+                r = child(src, what, args.repeat, caches[name]) if what == "kernel" else child(
+                    src, what, args.repeat, caches[name], SLAB)
+                t[name] += r["ns" if what == "kernel" else "us"]
                 mu[(what, name)] = r.get("mu_star")
         old, new = statistics.median(t["old"]), statistics.median(t["new"])
         print(f"| {what} | {unit} (median) | {old:.3f} | {new:.3f} | {new / old:.3f} |")

@@ -54,9 +54,11 @@ print(json.dumps(out))
 """
 
 
-def child(src: Path, what: str, repeat: int, cache: str) -> dict:
+def child(src: Path, what: str, repeat: int, cache: str, code: str = CHILD) -> dict:
+    """Run ``code`` (default: this module's CHILD) for ``what`` in a fresh process on the checkout ``src``
+    with the numba cache ``cache``; its last line of output, as JSON."""
     env = {**os.environ, "PYTHONPATH": str(src / "src"), "NUMBA_CACHE_DIR": cache}
-    proc = subprocess.run([sys.executable, "-c", CHILD, what, str(repeat)], env=env, capture_output=True, text=True,
+    proc = subprocess.run([sys.executable, "-c", code, what, str(repeat)], env=env, capture_output=True, text=True,
                           check=True)
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
