@@ -349,7 +349,8 @@ class Config(BaseModel):
     @property
     def K_Y(self) -> float:
         """IL spring along y, K_Y = G*a [N/m] (chain2d; 0 for the other geometries)."""
-        return self.G * self.a if geometry_of(self).body == "lattice" and geometry_of(self).two_d else 0.0
+        g = geometry_of(self)
+        return self.G * self.a if g.body == "lattice" and g.two_d else 0.0
 
     @property
     def K_LY(self) -> float:

@@ -148,11 +148,12 @@ def kernel_params(system: System) -> np.ndarray:
     p[S.P_SLOW] = SLOW_FRACTION * cfg.v_d
     p[S.P_LY] = cfg.Ly
     p[S.P_FOLD] = 0.0 if cfg.integrator == "fixed" else 1.0  # fold-aware contacts: fold, adaptive
-    if geometry_of(cfg).body == "lattice" and geometry_of(cfg).two_d:  # chain2d
+    g = geometry_of(cfg)
+    if g.body == "lattice" and g.two_d:  # chain2d
         p[S.P_LAT] = 1.0
         p[S.P_KY] = cfg.K_Y
         p[S.P_KLY] = cfg.K_LY
-    elif geometry_of(cfg).spectral:  # no upper layer: the kernel couples; radiation damping
+    elif g.spectral:  # no upper layer: the kernel couples; radiation damping
         p[S.P_KL] = p[S.P_KT] = 0.0
         p[S.P_META] = cfg.m * cfg.radiation_damping_rate
     if cfg.dead_weight is not None:  # constant force per upper block instead of the drive springs

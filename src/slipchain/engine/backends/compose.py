@@ -135,11 +135,10 @@ def scratch_arrays(n, cmax):
 
 
 @nb.njit(cache=True)
-def start_sample(row, n_contacts, ysolve, params, fd, ctl):
-    """A row at the start of an output sample: exact 10**y, exp(-c y^2) for its contacts, no f_d
-    yet, level 0 with no error estimate (so that a chunk boundary changes nothing)."""
+def start_sample(row, n_contacts, ysolve, params, ctl):
+    """A row at the start of an output sample: exact 10**y, exp(-c y^2) for its contacts, level 0
+    with no error estimate (so that a chunk boundary changes nothing)."""
     _refresh_solver(n_contacts[row], ysolve[row], params[row, P_C])
-    fd[row] = 0.0
     ctl[row, CT_J] = 0
     ctl[row, CT_LEVEL] = 0
     ctl[row, CT_LOADED] = -1
@@ -154,14 +153,14 @@ def kernel_driver(stepper):
     def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, n_samples, sample_steps,
                 out, acc, cacc, status):
         nb_rows, n = x.shape
+        # :func:`scratch_arrays`' work arrays, allocated here (fresh allocations in view of the optimiser, likely why:
+        # measured with benchmarks/bench_compose.py, through scratch_arrays the kernel is 4-5 % slower)
         cmax = sites.shape[1]
-        # the work arrays of :func:`scratch_arrays`, allocated here: measured 1-2 % faster
         un, Un, dampx, dampX = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         rk, ra, uk, fk = np.empty(cmax), np.empty(cmax), np.empty(cmax), np.empty(cmax)
         ok = np.empty(cmax, dtype=np.bool_)
         ysave = np.empty((N_YS_STATE, cmax))
         Fr = np.zeros(0)
-        fd = np.zeros(nb_rows)
         ctl = np.zeros((nb_rows, 4), dtype=np.int64)
         ap = np.zeros(2 * n)
         for row in range(nb_rows):
@@ -175,7 +174,7 @@ def kernel_driver(stepper):
             w_damp = 0.0
             w_contact = 0.0
             for s in range(n_samples):
-                start_sample(row, n_contacts, ysolve, params, fd, ctl)
+                start_sample(row, n_contacts, ysolve, params, ctl)
                 fds = 0.0
                 j = 0
                 for _ in range(sample_steps):  # every step takes at least one base step (a counted loop: faster)
@@ -241,10 +240,8 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     kern = batch.kernel
     k0 = np.ascontiguousarray(kern[:, 0, 0])
     neg = -kern
-    out = np.zeros((b, n_samples, N_OUT))
-    acc = np.zeros((b, N_ACC))
     cmax = batch.sites.shape[1]
-    cacc = np.zeros((b, N_CACC, cmax))
+    out, acc, cacc = _chunk_outputs(batch, n_samples)
     fd = np.zeros(b)
     dead = bool(np.any(batch.params[:, P_KD] == 0.0))  # dead-weight rows: the body acts on x - X
     grid = batch.x.reshape(b, lx, ly)  # a view: the FFT reads the state in place
@@ -254,16 +251,14 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
         spec *= neg
         return fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(b, n)
 
-    adaptive = batch.folds is not None
+    adaptive, folds, control = _stepper_inputs(batch)
     step_rows = loop(batch.geometry, adaptive)
-    folds = batch.folds if adaptive else np.zeros((b, 1, 2, cmax))
-    control = batch.step_control if adaptive else np.zeros((b, 4))
     ctl = np.zeros((b, 4), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, cmax)
     for s in range(n_samples):
         for row in np.flatnonzero(batch.status < 0):  # every sample starts afresh (checkpoints resume bit for bit)
-            start_sample(row, batch.n_contacts, batch.ysolve, batch.params, fd, ctl)
+            start_sample(row, batch.n_contacts, batch.ysolve, batch.params, ctl)
         # every accepted step takes at least one base step: sample_steps FFTs at most (the fixed step: exactly)
         for _ in range(sample_steps):
             if adaptive and not np.any((batch.status < 0) & (ctl[:, CT_J] < sample_steps)):
@@ -273,6 +268,40 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
                       sample_steps, batch.status, scratch)
         spectral.end_sample(batch.x, batch.X, batch.status, batch.step, fd, out, s, sample_steps, acc)
     return ChunkOutput(out, acc, cacc)
+
+
+def kernel_advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
+    """Advance every live row of a chains' batch by n_samples*sample_steps steps: one call of the
+    composed whole-chunk kernel (:func:`kernel_driver`)."""
+    out, acc, cacc = _chunk_outputs(batch, n_samples)
+    adaptive, folds, control = _stepper_inputs(batch)
+    loop(batch.geometry, adaptive)(batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites,
+                                   batch.vstar, batch.n_contacts, batch.ysolve, folds, control, n_samples,
+                                   sample_steps, out, acc, cacc, batch.status)
+    return ChunkOutput(out, acc, cacc)
+
+
+def advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
+    """Advance a batch on the CPU by the driver of its geometry's body: :func:`kernel_advance` (the
+    chains) or :func:`fft_advance` (the slab and half-space: the elastic force by FFT)."""
+    if BODIES[batch.geometry] == "spectral":
+        return fft_advance(batch, n_samples, sample_steps)
+    return kernel_advance(batch, n_samples, sample_steps)
+
+
+def _chunk_outputs(batch: Batch, n_samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Zeroed per-sample outputs, work sums and per-contact sums of one chunk (:class:`ChunkOutput`)."""
+    b = batch.x.shape[0]
+    return np.zeros((b, n_samples, N_OUT)), np.zeros((b, N_ACC)), np.zeros((b, N_CACC, batch.sites.shape[1]))
+
+
+def _stepper_inputs(batch: Batch) -> tuple[bool, np.ndarray, np.ndarray]:
+    """(adaptive, folds, step control) for the steppers' common signature: the batch's own with the
+    adaptive step, else zeroed stand-ins of the same types (the fixed stepper reads neither)."""
+    if batch.folds is not None:
+        return True, batch.folds, batch.step_control
+    b, cmax = batch.sites.shape
+    return False, np.zeros((b, 1, 2, cmax)), np.zeros((b, 4))
 
 
 
@@ -307,5 +336,5 @@ def _loop(body: str, adaptive: bool):
     return kernel_driver(step) if body == "lattice" else rows_driver(step, _body(body)[2] and not adaptive)
 
 
-__all__ = ["BODIES", "adaptive_stepper", "fft_advance", "fixed_stepper", "kernel_driver", "loop", "rows_driver",
-           "start_sample", "stepper"]
+__all__ = ["BODIES", "adaptive_stepper", "advance", "fft_advance", "fixed_stepper", "kernel_advance", "kernel_driver",
+           "loop", "rows_driver", "start_sample", "stepper"]
