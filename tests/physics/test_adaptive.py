@@ -143,12 +143,13 @@ def test_a_run_of_too_few_slip_cycles_says_how_to_converge():
     """Issue 26: at epsilon = 1 a slip cycle lasts about a second; a run that reaches t_max with a few
     cycles in its window says so and what converges it (counted again here from the trace); a run
     with many cycles that reaches t_max does not get the advice."""
-    long = sc.run(dict(N=31, theta=1.0, epsilon=1.0, start="steady", t_max=0.05, output_interval=1e-4, seed=1))
+    long = sc.run(dict(N=31, theta=1.0, epsilon=1.0, start="steady", t_max=0.05, output_interval=1e-4, seed=1,
+                       t_max_cycles=0.0))  # no extension past t_max (tests/physics/test_cycle_length.py)
     fd = long.f_d.values
     cycles = count_cycles(fd[steady_estimate(fd).start:])
     msg = long.attrs["message"]
     assert "t_max = 0.05 s reached" in msg and cycles < 5
-    assert f"holds only {cycles} cycle(s) of f_d" in msg and "min_cycles = 20" in msg
+    assert f"holds only {cycles} cycle(s) of f_d" in msg and "t_max_cycles" in msg and "min_cycles = 20" in msg
     # epsilon = 1e-2: many short slip events in the window (an unreachable target keeps it to t_max): no advice
     many = sc.run(dict(N=31, theta=0.5, start="steady", sem_target=1e-6, t_max=0.05, seed=1))
     fd = many.f_d.values

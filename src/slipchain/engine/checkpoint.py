@@ -8,8 +8,8 @@ stopped:
   chains, the step counter, the kernel parameters, the contacts, and the contact solver's warm
   start (``ysolve``: log10 of each contact's velocity and its two Taylor factors; the implicit
   contact solve starts from it, so it is state, not a cache);
-* each row's control (:class:`~slipchain.engine.control.RowControl`): samples done, limit,
-  active/status/message, the automatic length's f_d and <x> series and its last SE (the
+* each row's control (:class:`~slipchain.engine.control.RowControl`): samples done, limit (a
+  limit above the config's says the run was extended by its slip cycles), active/status/message, the automatic length's f_d and <x> series and its last SE (the
   dead-weight ramp is a function of the samples done);
 * the recorder (:class:`~slipchain.engine.observers.Recorder`): every sample so far, the chunk
   boundaries, the per-contact sums per chunk and the work sums;
@@ -139,7 +139,7 @@ class Checkpointer:
                                       f"this run needs {target.shape}")
             target[...] = value
         for r, c in enumerate(controls):
-            c.limit = int(ds["limit"].values[r])
+            c.limit = int(ds["limit"].values[r])  # a cap extended by slip cycles is kept (RowControl.extend)
             c.n = int(ds["samples_done"].values[r])
             c.active = bool(ds["active"].values[r])
             c.status = Status(str(ds["row_status"].values[r]))
@@ -149,6 +149,7 @@ class Checkpointer:
                 c.converge.x_mean = [ds[f"conv_x_mean_{r}"].values.copy()]
                 c.converge.reached = bool(ds["conv_reached"].values[r])
                 c.converge.sem = float(ds["conv_sem"].values[r])
+                c.converge.extended = c.limit > c.base_limit  # the cap only grows past the config's by extend()
             samples = ds[f"rec_samples_{r}"].values
             lengths = ds[f"rec_chunk_samples_{r}"].values.astype(int)
             cuts = np.cumsum(lengths)[:-1]

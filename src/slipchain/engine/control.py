@@ -26,7 +26,9 @@ DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace eac
 # (each classification fits the whole trace: checking every chunk would cost as much as the run)
 CHUNK_TIME = 5e-4  # simulated seconds per compiled chunk (about 25 000 steps at the default dt)
 LONG_CHUNK_TIME = 0.05  # ... for runs with min_cycles (epsilon = 1: runs of tens of seconds, 1 ms samples)
-FEW_CYCLES = 5  # at t_max with fewer cycles than this in the steady window, the message says how to converge
+FEW_CYCLES = 5  # at t_max with fewer cycles than this in the steady window, the run stick-slips as a whole in
+# cycles as long as the run: it is extended (t_max_cycles), or the message says how to converge it
+DEFAULT_MIN_CYCLES = 20  # an extended run's steady window must hold this many cycles (min_cycles, if given, instead)
 MIN_STEADY_SAMPLES = 400  # automatic mode: at least this many steady samples before stopping
 MIN_STEADY_SLIDE = 1e-6  # ...and a steady window in which the drive has moved at least this far (m):
 # at very low v_d a steady start can look converged (tiny SE, no drift) long before it has settled
@@ -75,13 +77,20 @@ class UntilConverged:
     x_mean: list[np.ndarray] = field(default_factory=list)
     reached: bool = False
     sem: float = float("nan")
+    extended: bool = False  # past t_max by the slip-cycle rule (:meth:`RowControl.extend`)
+
+    @property
+    def cycles_required(self) -> int:
+        """Cycles of f_d the steady window must hold: ``min_cycles``; once extended past t_max by its
+        slip cycles, DEFAULT_MIN_CYCLES where ``min_cycles`` is not given; else none."""
+        return self.system.config.min_cycles or (DEFAULT_MIN_CYCLES if self.extended else 0)
 
     def converged(self, out_row: np.ndarray) -> bool:
         """Append one chunk's samples (N_OUT columns) and say whether the run may stop."""
         cfg = self.system.config
         self.f_d.append(out_row[:, S.O_FD])
         self.x_mean.append(out_row[:, S.O_XMEAN])
-        if cfg.min_cycles:
+        if self.cycles_required:
             n = sum(a.shape[0] for a in self.f_d)
             if (geometric_check_index(n, MIN_STEADY_SAMPLES)
                     == geometric_check_index(n - out_row.shape[0], MIN_STEADY_SAMPLES)):
@@ -93,33 +102,45 @@ class UntilConverged:
         if (est.n_samples >= MIN_STEADY_SAMPLES and est.drift_ok and est.sem <= cfg.sem_target
                 and est.n_samples * self.interval * cfg.v_d >= MIN_STEADY_SLIDE
                 and self._follows_drive(np.concatenate(self.x_mean), est.start)
-                and (not cfg.min_cycles or self._cycles_ok(fd[est.start:]))):
+                and (not self.cycles_required or self._cycles_ok(fd[est.start:]))):
             self.reached = True
         return self.reached
 
-    def few_cycles_advice(self) -> str:
-        """At t_max without convergence: if the steady window holds fewer than FEW_CYCLES cycles of f_d
-        (the whole interface stick-slipping in cycles longer than the run, as at epsilon = 1), say
-        so and what lets such a run converge; else nothing."""
+    def window_cycles(self) -> tuple[int, int, bool]:
+        """The steady window now: its first sample (MSER), the cycles of f_d it holds, and whether it
+        slides steadily (varies less than sem_target and follows the drive: no cycles to count)."""
         if not self.f_d:
-            return ""
+            return 0, 0, False
         fd = np.concatenate(self.f_d) / mu_star_norm(self.system)
         start = steady_estimate(fd).start
         window = fd[start:]
-        cycles = count_cycles(window)
-        steady_sliding = (window.std() <= self.system.config.sem_target
-                          and self._follows_drive(np.concatenate(self.x_mean), start))  # no cycles to count
-        if cycles >= FEW_CYCLES or steady_sliding:
+        steady_sliding = (window.size > 0 and window.std() <= self.system.config.sem_target
+                          and self._follows_drive(np.concatenate(self.x_mean), start))
+        return start, count_cycles(window), bool(steady_sliding)
+
+    def few_cycles_advice(self) -> str:
+        """At the cap without convergence: if the steady window holds fewer cycles of f_d than the run
+        needs (FEW_CYCLES, or :attr:`cycles_required` once extended: the whole interface
+        stick-slipping in cycles as long as the run, as at epsilon = 1), say so and what lets such a
+        run converge; else nothing."""
+        _, cycles, steady_sliding = self.window_cycles()
+        if cycles >= max(FEW_CYCLES, self.cycles_required if self.extended else 0) or steady_sliding or not self.f_d:
             return ""
+        cfg = self.system.config
+        if self.extended:
+            return (f"; the steady window holds only {cycles} cycle(s) of f_d at t_max_cycles = {cfg.t_max_cycles:g} s "
+                    "(slip cycles as long as the run): raise t_max_cycles, with output_interval = 1e-3 and "
+                    "start = 'steady' as presets/fig6-eps1.toml does for epsilon = 1")
         return (f"; the steady window holds only {cycles} cycle(s) of f_d (slip cycles as long as the run): give "
-                "t_max long enough for tens of cycles with min_cycles = 20, output_interval = 1e-3 and "
-                "start = 'steady', as presets/fig6-eps1.toml does for epsilon = 1")
+                "t_max_cycles (the cap that follows slip cycles), or t_max long enough for tens of cycles with "
+                "min_cycles = 20, output_interval = 1e-3 and start = 'steady', as presets/fig6-eps1.toml does for "
+                "epsilon = 1")
 
     def _cycles_ok(self, window: np.ndarray) -> bool:
-        """min_cycles cycles in the steady window, or a window that varies less than sem_target
-        (steady sliding: no cycles to count, and no sample farther from the mean than the target)."""
+        """:attr:`cycles_required` cycles in the steady window, or a window that varies less than
+        sem_target (steady sliding: no cycles to count, and no sample farther from the mean than the target)."""
         cfg = self.system.config
-        return bool(window.std() <= cfg.sem_target or count_cycles(window) >= cfg.min_cycles)
+        return bool(window.std() <= cfg.sem_target or count_cycles(window) >= self.cycles_required)
 
     def _follows_drive(self, x_mean: np.ndarray, start: int) -> bool:
         v = window_velocity(x_mean, start, self.x0_mean, self.interval)
@@ -188,6 +209,9 @@ class RowControl:
     active: bool = True
     status: Status = Status.COMPLETED
     message: str = ""
+    base_limit: int = 0  # the limit the config sets (t_total or t_max); past it only by :meth:`extend`
+    long_chunk: int = 1  # samples per chunk once extended (LONG_CHUNK_TIME)
+    note: str = ""  # why the run was not extended, for the final message
 
     @property
     def remaining(self) -> int:
@@ -200,6 +224,15 @@ class RowControl:
     def stop(self, status: Status, message: str) -> None:
         self.status, self.message, self.active = status, message, False
 
+    @property
+    def extended(self) -> bool:
+        return self.converge is not None and self.converge.extended
+
+    def chunk_cap(self, chunk: int) -> int:
+        """Samples this row may run in the next chunk: ``chunk``, or the long chunk once extended
+        (slip cycles of seconds: the per-contact sums are kept per chunk)."""
+        return max(chunk, self.long_chunk) if self.extended else chunk
+
     def after_chunk(self, n: int, out_row: np.ndarray) -> None:
         """Account for ``n`` samples just run (``out_row`` holds them) and decide whether to stop."""
         self.n += n
@@ -207,13 +240,61 @@ class RowControl:
             self.active = False
         if self.decide is not None and self.decide.decided(self.n, out_row):
             self.active = False
-        if self.n >= self.limit:
+        if self.n >= self.limit and not (self.active and self.extend()):
             self.active = False
+
+    def extend(self) -> bool:
+        """At the cap, unconverged: extend the cap if the run stick-slips as a whole in cycles as long
+        as the run (config ``t_max_cycles``; issue 26). Returns whether it did.
+
+        The rule: the steady window (MSER) holds fewer cycles of f_d than FEW_CYCLES (at t_max; or
+        than :attr:`UntilConverged.cycles_required` with ``min_cycles`` or once extended) and does
+        not slide steadily. The new cap follows the cycles: with two or more counted, the window's
+        start plus (cycles_required + 2) periods, and at least two periods past now; with fewer,
+        twice the time so far; at most ``t_max_cycles``. From then on the steady window must hold
+        :attr:`UntilConverged.cycles_required` cycles, the conditions are checked each time the
+        trace has grown by DECIDE_EVERY, and chunks are long (as with ``min_cycles``). Each choice
+        is a function of the samples alone, so a resumed run extends where the uninterrupted one
+        did. The extension is refused, and the final message says why, where its memory estimate
+        does not fit in what the machine has available (:func:`.memory.extension_refusal`).
+        """
+        cv = self.converge
+        if cv is None or cv.reached:
+            return False
+        cfg = cv.system.config
+        ceiling = int(round(cfg.t_max_cycles / cv.interval))
+        if not cfg.t_max_cycles or self.limit >= ceiling:
+            return False
+        start, cycles, steady_sliding = cv.window_cycles()
+        need = cv.cycles_required if (cv.extended or cfg.min_cycles) else FEW_CYCLES
+        if steady_sliding or cycles >= need:
+            return False
+        target = cfg.min_cycles or DEFAULT_MIN_CYCLES
+        if cycles >= 2:
+            period = (self.n - start) / cycles
+            new = max(start + (target + 2) * period, self.n + 2 * period)
+        else:
+            new = 2.0 * self.n
+        new_limit = min(ceiling, max(self.limit + 1, int(np.ceil(new))))
+        from .memory import extension_refusal
+
+        why = extension_refusal(cfg, self.n * cv.interval, new_limit * cv.interval)
+        if why is not None:
+            self.note = why
+            return False
+        self.limit = new_limit
+        cv.extended = True
+        return True
 
     def final_message(self, t_max: float, sem_target: float) -> str:
         if self.converge is not None and self.status == Status.COMPLETED and not self.converge.reached:
-            return (f"t_max = {t_max:g} s reached before the standard error fell below "
-                    f"sem_target = {sem_target:g}" + self.converge.few_cycles_advice())
+            cap = (f"the cap {self.limit * self.converge.interval:g} s (extended past t_max = {t_max:g} s by its slip "
+                   "cycles)" if self.extended else f"t_max = {t_max:g} s")
+            return (f"{cap} reached before the standard error fell below sem_target = {sem_target:g}"
+                    + self.converge.few_cycles_advice() + (f"; {self.note}" if self.note else ""))
+        if self.extended and self.status == Status.COMPLETED:
+            return (f"converged at t = {self.n * self.converge.interval:g} s, past t_max = {t_max:g} s: the run "
+                    "stick-slips as a whole and its automatic length followed its slip cycles (t_max_cycles)")
         if self.decide is not None and self.status == Status.COMPLETED and not self.decide.reached:
             return f"t_max = {t_max:g} s reached while the dead-weight velocity still drifted (see velocity_reason)"
         return self.message
@@ -228,18 +309,19 @@ def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     velocity is measured after the ramp."""
     c = system.config
     limit = max(1, int(round((c.t_total if c.t_total is not None else c.t_max) / interval)))
+    long_chunk = max(1, int(round(LONG_CHUNK_TIME / interval)))
     dead_weight = c.dead_weight is not None
     auto = c.t_total is None and not dead_weight
     decide = dead_weight and c.t_decide is not None
     ramp_time = dead_weight_ramp_time(c)
     n_ramp = max(1, int(round(ramp_time / interval if ramp_time is not None else DEAD_WEIGHT_RAMP * limit)))
     return RowControl(
-        limit=limit,
+        limit=limit, base_limit=limit, long_chunk=long_chunk,
         converge=UntilConverged(system, x0_mean, interval) if auto else None,
         ramp=DeadWeightRamp(dead_weight_force(system), n_ramp) if dead_weight else None,
         decide=UntilDecided(system, interval, max(1, int(round(c.t_decide / interval)))) if decide else None,
     )
 
 
-__all__ = ["CHUNK_TIME", "LONG_CHUNK_TIME", "chunk_samples", "chunk_time", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
+__all__ = ["CHUNK_TIME", "DEFAULT_MIN_CYCLES", "FEW_CYCLES", "LONG_CHUNK_TIME", "chunk_samples", "chunk_time", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
            "row_control"]

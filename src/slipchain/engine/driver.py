@@ -2,8 +2,9 @@
 
 Loop order (each chunk), as in hoomd's ``Simulation.run``:
 
-1. the rows still active and the chunk length: at most ``chunk`` samples, at most what any live
-   row has left, one sample while a dead-weight ramp is rising (:mod:`.control`);
+1. the rows still active and the chunk length: at most ``chunk`` samples (a row extended past
+   t_max by its slip cycles allows long chunks), at most what any live row has left, one sample
+   while a dead-weight ramp is rising (:mod:`.control`);
 2. the dead-weight force of each ramping row is written into its parameters;
 3. the backend advances every live row by ``n`` samples of ``sample_steps`` steps in compiled
    code (finished rows are skipped by the kernel);
@@ -43,7 +44,7 @@ def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_
     try:
         while any(c.active for c in controls):
             live = [i for i, c in enumerate(controls) if c.active]
-            n = min(chunk, min(controls[i].remaining for i in live))
+            n = min(min(controls[i].chunk_cap(chunk) for i in live), min(controls[i].remaining for i in live))
             f_now = np.zeros(len(controls))
             sum_x0 = batch.X.sum(axis=1)
             for i in live:

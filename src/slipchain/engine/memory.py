@@ -34,7 +34,7 @@ from typing import Iterable
 from ..model.config import Config, ConfigError
 from ..model.geometries import geometry_of
 from . import scheme as S
-from .control import CHUNK_TIME, chunk_time
+from .control import CHUNK_TIME, LONG_CHUNK_TIME, chunk_time
 
 BYTES_PER_BLOCK = 128
 BYTES_PER_CONTACT = 176
@@ -58,10 +58,15 @@ def simulated_length(cfg: Config) -> float:
 BYTES_PER_BLOCK_FFT = 64
 
 
-def estimate_bytes(cfg: Config) -> int:
-    """Bytes that one realisation of ``cfg`` holds at its peak, beyond the interpreter (see the module docstring)."""
-    t = simulated_length(cfg)
-    chunks = int(t / max(chunk_time(cfg), cfg.output_interval)) + 1
+def estimate_bytes(cfg: Config, t: float | None = None) -> int:
+    """Bytes that one realisation of ``cfg`` holds at its peak, beyond the interpreter (see the module
+    docstring), for a run of ``t`` simulated seconds (default :func:`simulated_length`; past
+    ``t_max``, a run extended by its slip cycles, in long chunks)."""
+    t = simulated_length(cfg) if t is None else t
+    extended = cfg.t_total is None and t > cfg.t_max
+    chunks = int((cfg.t_max if extended else t) / max(chunk_time(cfg), cfg.output_interval)) + 1
+    if extended:
+        chunks += int((t - cfg.t_max) / max(LONG_CHUNK_TIME, cfg.output_interval)) + 1
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
     per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if geometry_of(cfg).spectral else 0)
@@ -121,5 +126,21 @@ def check_memory(configs: Iterable[Config], available: int | None = None) -> int
         f"{S.N_CACC * 8} bytes per {CHUNK_TIME:g} s simulated). Reduce N, theta or the run length, "
         "or set SLIPCHAIN_MEMORY_CHECK=0 to run anyway.")
 
+def extension_refusal(cfg: Config, t_now: float, t_new: float, available: int | None = None) -> str | None:
+    """Why a run of ``cfg`` at ``t_now`` may not be extended to ``t_new`` simulated seconds by its slip
+    cycles (:meth:`slipchain.engine.control.RowControl.extend`): the memory the extension adds (its
+    estimate at ``t_new`` less that at ``t_now``, which the run already holds) is more than the
+    machine has available, less the margin :func:`check_memory` keeps (BASE_BYTES). None where it
+    fits, cannot be told, or ``SLIPCHAIN_MEMORY_CHECK=0``."""
+    if os.environ.get("SLIPCHAIN_MEMORY_CHECK", "1") == "0":
+        return None
+    have = available_bytes() if available is None else available
+    extra = estimate_bytes(cfg, t_new) - estimate_bytes(cfg, t_now)
+    if have is None or extra + BASE_BYTES <= have:
+        return None
+    return (f"not extended to {t_new:g} s: that needs about {extra / GiB:,.1f} GiB more memory, more than the "
+            f"{have / GiB:,.1f} GiB available (lower t_max_cycles or output_interval)")
+
+
 __all__ = ["BASE_BYTES", "BYTES_PER_BLOCK", "BYTES_PER_CONTACT", "BYTES_PER_SAMPLE", "MemoryEstimateError",
-           "available_bytes", "check_memory", "estimate_bytes", "simulated_length"]
+           "available_bytes", "check_memory", "estimate_bytes", "extension_refusal", "simulated_length"]

@@ -125,6 +125,9 @@ class ProgressBar:
             auto = self.control.converge is not None
             self._task = self._bar.add_task("run", total=self.total,
                                             info="up to t_max; stops at sem_target" if auto else "")
+        if self.control.limit * self.interval != self.total:  # extended past t_max by its slip cycles
+            self.total = self.control.limit * self.interval
+            self._bar.update(self._task, total=self.total)
         sem = self.control.converge.sem if self.control.converge is not None else float("nan")
         info = f"SE(mu*) = {sem:.4f}" if np.isfinite(sem) else ""
         self._bar.update(self._task, completed=(self.control.n + n) * self.interval, info=info)

@@ -45,6 +45,9 @@ ALLOWED: dict[str, str] = {
     "dt": "a number > 0 (s), or absent for the default of the integrator (Config.default_dt)",
     "t_total": "a number > 0 (s), or absent for an automatic run length",
     "t_max": "a number > 0 (s)",
+    "t_max_cycles": "a number >= 0 (s): the cap of the automatic length of a run that stick-slips as a whole in "
+                    "cycles as long as the run follows its cycles up to this (0: no extension past t_max); more than "
+                    "t_max, absent with t_total or dead_weight",
     "t_decide": "a number > 0 (s), less than t_max, only with dead_weight and without t_total; or absent",
     "t_ramp": "a number > 0 (s), only with dead_weight, shorter than t_decide (else than the run); or absent",
     "sem_target": "a number > 0",
@@ -66,13 +69,20 @@ LEGACY_KEYS: dict[str, str] = {
 # (legacy=True) lacks them, and left out of the TOML text while that is also today's default.
 # integrator: 'fixed' was the default until issue 26 made it 'adaptive'; a stored config or store
 # without the key ran with the fixed step and keeps that meaning.
-OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0}
+# t_max_cycles: 0 (no extension past t_max) until issue 26 made the automatic length follow slip cycles.
+OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0,
+                       "t_max_cycles": 0.0}
 _NOT_OFF = object()
 
 # The adaptive step's largest step stays below this fraction of the stable step (Config.dt_stable).
 STABLE_FRACTION = 0.9
 DEFAULT_DT_LEVELS = 2  # dt absent: the base step lies at least 2**2 below the adaptive step's ceiling
 MAX_STEP_LEVELS = 6  # integrator = 'adaptive': the step doubles at most this often (dt ... 64 dt)
+# t_max_cycles absent: the automatic length of a run that stick-slips as a whole may follow its slip
+# cycles up to this many seconds (the cap of presets/fig6-eps1.toml, 20 cycles of 1.1 s at epsilon = 1,
+# theta = 1, v_d = v0, plus its transient); where it has no effect (a fixed length, a dead weight, or
+# t_max already at least this), absent means 0.
+DEFAULT_T_MAX_CYCLES = 30.0
 
 
 class ConfigError(ValueError):
@@ -108,6 +118,11 @@ class Config(BaseModel):
     ``dt`` absent: :attr:`default_dt`; every dt must lie below :attr:`dt_stable`;
     ``min_cycles``: the automatic length also needs this many cycles of f_d in its steady window
     (:class:`slipchain.engine.control.UntilConverged`; for the long slip cycles at epsilon = 1);
+    ``t_max_cycles``: a run that reaches ``t_max`` unconverged with fewer than FEW_CYCLES slip cycles in
+    its steady window (the whole interface stick-slipping in cycles as long as the run) goes on, its
+    cap following its cycles (``min_cycles``, else DEFAULT_MIN_CYCLES, plus two), at most this
+    (:meth:`slipchain.engine.control.RowControl.extend`); absent: DEFAULT_T_MAX_CYCLES where it can
+    act, else 0 (no extension; also what a stored config without the key means);
     ``output_interval`` sampling interval of f_d(t) (each sample is the average over the
     interval); ``seed`` for the disorder. Where a run is executed (CPU or GPU) is not part of the
     config: it is an argument of :func:`slipchain.run` and the CLI's ``--backend``.
@@ -141,6 +156,7 @@ class Config(BaseModel):
     dt: float = Field(2e-8, gt=0)  # absent from the input: Config.default_dt (the 2e-8 is never used)
     t_total: float | None = Field(None, gt=0)
     t_max: float = Field(0.25, gt=0)
+    t_max_cycles: float = Field(DEFAULT_T_MAX_CYCLES, ge=0)  # absent from the input: see _default_step
     t_decide: float | None = Field(None, gt=0)
     t_ramp: float | None = Field(None, gt=0)
     sem_target: float = Field(0.01, gt=0)
@@ -159,7 +175,11 @@ class Config(BaseModel):
     @model_validator(mode="wrap")
     @classmethod
     def _default_step(cls, data: Any, handler: Any) -> "Config":
-        """dt absent (or None): :attr:`default_dt` of the config with every other value as given."""
+        """dt absent (or None): :attr:`default_dt` of the config with every other value as given.
+        t_max_cycles absent (or None): DEFAULT_T_MAX_CYCLES where the slip-cycle extension can act
+        (the spring drive's automatic length with t_max below it), else 0."""
+        if isinstance(data, Mapping) and data.get("t_max_cycles") is None:
+            data = {**data, "t_max_cycles": _default_t_max_cycles(data)}
         if not isinstance(data, Mapping) or data.get("dt") is not None:
             return handler(data)
         probe = handler({**data, "dt": 1e-15})  # the fields alone (the checks below run on the result)
@@ -213,6 +233,11 @@ class Config(BaseModel):
         if self.integrator != "adaptive" and self.step_tol != OFF["step_tol"]:
             raise ValueError(_message("step_tol", self.step_tol, "absent unless integrator = 'adaptive' (it is the "
                                       "adaptive step's tolerance)"))
+        if self.t_max_cycles and (self.t_total is not None or self.dead_weight is not None
+                                  or not self.t_max_cycles > self.t_max):
+            raise ValueError(_message("t_max_cycles", self.t_max_cycles, f"more than t_max = {self.t_max:g}, and 0 "
+                                      "(absent) with t_total or dead_weight: it caps the spring drive's automatic "
+                                      "length past t_max"))
         if self.min_cycles and (self.t_total is not None or self.dead_weight is not None):
             raise ValueError(_message("min_cycles", self.min_cycles, "0 (absent) with t_total or dead_weight: it is a "
                                       "condition of the spring drive's automatic run length"))
@@ -424,16 +449,33 @@ class Config(BaseModel):
         data = self.model_dump()
         if self._dt_auto:
             data.pop("dt")
+        if "t_max_cycles" not in updates and self.t_max_cycles == _default_t_max_cycles(data):
+            data.pop("t_max_cycles")  # the default: chosen again for the new values
         return make_config({**data, **updates})
 
     def to_toml(self) -> str:
         """The config as flat TOML (None values omitted), readable by :func:`load_config`."""
         lines = []
         for key, value in self.model_dump().items():
-            if value is None or (OFF.get(key, _NOT_OFF) == value and Config.model_fields[key].default == value):
+            absent = (_default_t_max_cycles(self.model_dump()) if key == "t_max_cycles"
+                      else Config.model_fields[key].default)  # what the key's absence means today
+            if value is None or (OFF.get(key, _NOT_OFF) == value and absent == value):
                 continue
             lines.append(f"{key} = {_toml_value(value)}")
         return "\n".join(lines) + "\n"
+
+
+def _default_t_max_cycles(data: Mapping[str, Any]) -> float:
+    """t_max_cycles where the input does not give it: DEFAULT_T_MAX_CYCLES for the spring drive's
+    automatic length with t_max below it, else 0 (the extension could not act: a fixed length, a
+    dead weight, or a t_max already at least as long)."""
+    t_max = data.get("t_max", Config.model_fields["t_max"].default)
+    if data.get("t_total") is not None or data.get("dead_weight") is not None:
+        return 0.0
+    try:
+        return DEFAULT_T_MAX_CYCLES if float(t_max) < DEFAULT_T_MAX_CYCLES else 0.0
+    except (TypeError, ValueError):  # a bad t_max: its own check names it
+        return 0.0
 
 
 def _toml_value(value: Any) -> str:
@@ -544,4 +586,4 @@ def load_config(path: str | Path | None = None, overrides: Sequence[str] = ()) -
     return make_config(data)
 
 
-__all__ = ["ALLOWED", "LEGACY_KEYS", "OFF", "STABLE_FRACTION", "Config", "ConfigError", "config_from_toml", "load_config", "make_config", "parse_override", "read_toml"]
+__all__ = ["ALLOWED", "DEFAULT_T_MAX_CYCLES", "LEGACY_KEYS", "OFF", "STABLE_FRACTION", "Config", "ConfigError", "config_from_toml", "load_config", "make_config", "parse_override", "read_toml"]
