@@ -13,6 +13,7 @@ run next and whether a row is done.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any, Callable
 
 import numpy as np
 
@@ -212,6 +213,9 @@ class RowControl:
     base_limit: int = 0  # the limit the config sets (t_total or t_max); past it only by :meth:`extend`
     long_chunk: int = 1  # samples per chunk once extended (LONG_CHUNK_TIME)
     note: str = ""  # why the run was not extended, for the final message
+    # (cfg, t_now, t_new) -> why an extension to t_new would not fit in memory, or None
+    # (:func:`.memory.extension_refusal`, given by the caller: memory's estimate builds on this module)
+    memory_refusal: Callable[[Any, float, float], str | None] | None = None
 
     @property
     def remaining(self) -> int:
@@ -256,7 +260,7 @@ class RowControl:
         trace has grown by DECIDE_EVERY, and chunks are long (as with ``min_cycles``). Each choice
         is a function of the samples alone, so a resumed run extends where the uninterrupted one
         did. The extension is refused, and the final message says why, where its memory estimate
-        does not fit in what the machine has available (:func:`.memory.extension_refusal`).
+        does not fit in what the machine has available (``memory_refusal``).
         """
         cv = self.converge
         if cv is None or cv.reached:
@@ -276,9 +280,7 @@ class RowControl:
         else:
             new = 2.0 * self.n
         new_limit = min(ceiling, max(self.limit + 1, int(np.ceil(new))))
-        from .memory import extension_refusal
-
-        why = extension_refusal(cfg, self.n * cv.interval, new_limit * cv.interval)
+        why = self.memory_refusal(cfg, self.n * cv.interval, new_limit * cv.interval) if self.memory_refusal else None
         if why is not None:
             self.note = why
             return False
@@ -300,7 +302,8 @@ class RowControl:
         return self.message
 
 
-def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
+def row_control(system: System, x0_mean: float, interval: float,
+                memory_refusal: Callable[[Any, float, float], str | None] | None = None) -> RowControl:
     """The control of one realisation from its config: fixed length (``t_total``), automatic
     (``t_total`` absent: until converged, at most ``t_max``), and the dead-weight ramp. Dead-weight
     runs have a fixed length (``t_total``, else ``t_max``; ramp over its first DEAD_WEIGHT_RAMP),
@@ -316,7 +319,7 @@ def row_control(system: System, x0_mean: float, interval: float) -> RowControl:
     ramp_time = dead_weight_ramp_time(c)
     n_ramp = max(1, int(round(ramp_time / interval if ramp_time is not None else DEAD_WEIGHT_RAMP * limit)))
     return RowControl(
-        limit=limit, base_limit=limit, long_chunk=long_chunk,
+        limit=limit, base_limit=limit, long_chunk=long_chunk, memory_refusal=memory_refusal,
         converge=UntilConverged(system, x0_mean, interval) if auto else None,
         ramp=DeadWeightRamp(dead_weight_force(system), n_ramp) if dead_weight else None,
         decide=UntilDecided(system, interval, max(1, int(round(c.t_decide / interval)))) if decide else None,

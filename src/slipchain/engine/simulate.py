@@ -27,7 +27,7 @@ from .backends import BackendName, Batch, get_backend
 from .checkpoint import CHECKPOINT_EVERY, Checkpointer
 from .control import chunk_samples, row_control
 from .driver import drive
-from .memory import check_memory
+from .memory import check_memory, extension_refusal
 from .observers import ProgressBar, Recorder
 
 
@@ -86,7 +86,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     interval = sample_steps * cfg0.dt
     x0 = [float(np.mean(st.x)) for st in states0]
     e0 = [stored_energy(s, st) for s, st in zip(systems, states0)]
-    controls = [row_control(s, x0[i], interval) for i, s in enumerate(systems)]
+    controls = [row_control(s, x0[i], interval, extension_refusal) for i, s in enumerate(systems)]
     recorder = Recorder([s.n_contacts for s in systems])
     saver, wall_before, resumed_at = None, 0.0, []
     if checkpoint is not None:
