@@ -102,7 +102,7 @@ def _slow_sweep(tmp_path, members):
     cluster, its store, and the driver started in a new session (so its cluster can be killed)."""
     definition = tmp_path / "sweep.toml"
     definition.write_text(
-        'name = "slow"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\n'
+        'name = "slow"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\nintegrator = "fixed"\n'
         f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(members)))}]\n")
     store = tmp_path / "s"
     cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store), "--workers", "2",
@@ -178,6 +178,21 @@ def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
     done = list(members.glob("*.nc"))
     assert 1 <= len(done) < 8 and all(read_dataset(p).attrs["status"] == "completed" for p in done)
     assert Store.open(store).invocations()[-1]["interrupted"] is True
+
+
+def test_sigterm_is_handled_as_ctrl_c_and_exits_143(tmp_path):
+    """Issue 30: a batch scheduler's SIGTERM at the wall-time limit (it ended the sweep silently,
+    exit 143 from the default action, without the store's index or log): now as Ctrl-C, with 143."""
+    cmd, store, code, out = _interrupt_sweep(tmp_path, signal.SIGTERM, 1)
+    assert code == 143, out
+    assert "(interrupted)" in out
+    done = list((store / "members").glob("*.nc"))
+    assert 1 <= len(done) and all(read_dataset(p).attrs["status"] == "completed" for p in done)
+    assert Store.open(store).invocations()[-1]["interrupted"] is True
+    assert (store / "index.csv").exists() and not list(store.rglob("*.tmp"))
+    again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)  # resumes: nothing lost
+    assert again.returncode == 0, again.stderr
+    assert len(list((store / "members").glob("*.nc"))) == 8
 
 
 def test_batched_tasks_store_the_same_members(tmp_path, client):

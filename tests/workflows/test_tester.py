@@ -235,3 +235,22 @@ def test_bytes_that_are_not_utf8_give_one_line_and_exit_2_writing_nothing(tmp_pa
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip() == f"error: {bad}: not UTF-8 text: byte 0xff at byte offset 18 (line 2)"
     assert not (tmp_path / "out").exists()
+
+
+def test_a_fit_whose_variance_rounds_below_zero_gives_no_nan():
+    """Issue 30: a smooth 75-point trace of <X> (tests/data: the dead-weight row of
+    tests/physics/test_backends.py over 2e-5 s) fits a parabola so well that the pseudo-inverse
+    returns its coefficient variance as a negative round-off; the square root gave a NaN and a
+    RuntimeWarning. Now that variance is zero: no warning, a finite reason, and the straight line
+    x = v t (an exact fit) has a standard error of zero, not NaN."""
+    import warnings
+    from pathlib import Path
+
+    data = np.load(Path(__file__).resolve().parents[1] / "data" / "velocity-negative-variance.npz")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fit = steady_velocity(data["t"], data["x"])
+        assert fit.status == RUNAWAY and "nan" not in fit.reason.lower()
+        t = np.linspace(0.0, 1.0, 101)
+        line = steady_velocity(t, 1e-3 * t)
+    assert line.status == OK and line.velocity == pytest.approx(1e-3) and 0.0 <= line.sem < 1e-15

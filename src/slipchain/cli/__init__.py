@@ -7,7 +7,8 @@
   ``slipchain tester analyze|synth``.
 
 Exit codes: 0 completed; 1 diverged or some members failed (results are still written, with
-their messages); 2 rejected input (nothing written); 130 interrupted (finished work is kept).
+their messages); 2 rejected input (nothing written); 130 interrupted by Ctrl-C, 143 by SIGTERM
+(a batch scheduler's time limit: handled as Ctrl-C; finished work and checkpoints are kept).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Annotated
 
 import typer
 
+from ..engine.interrupts import sigterm_as_interrupt
 from .common import EXIT_CODES, show_warnings
 from .dead_weight import mu_max
 from .figure import figure_app
@@ -42,6 +44,7 @@ def _main(
 ) -> None:
     """slipchain: simulate, sweep and plot the multi-contact friction model."""
     show_warnings()
+    sigterm_as_interrupt()  # SIGTERM as Ctrl-C: message, checkpoints, exit 143
 
 
 app.command()(run)

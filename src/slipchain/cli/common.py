@@ -8,6 +8,7 @@ from typing import Annotated, NoReturn, Optional
 import typer
 from rich.console import Console
 
+from ..engine import interrupts
 from ..engine.backends import BackendName
 from ..results.schema import Status
 from ..sweeps.executor import SweepReport
@@ -16,7 +17,8 @@ err = Console(stderr=True)
 out = Console()
 
 # Exit codes: 0 completed; 1 diverged or some members failed (results are still written, with
-# their messages); 2 rejected input (nothing written); 130 interrupted (finished work is kept).
+# their messages); 2 rejected input (nothing written); 130 interrupted by Ctrl-C, 143 by SIGTERM
+# (finished work is kept; :mod:`slipchain.engine.interrupts`).
 EXIT_CODES = {Status.COMPLETED: 0, Status.DIVERGED: 1, Status.INTERRUPTED: 130}
 
 
@@ -51,7 +53,12 @@ def wrote(paths) -> None:
 
 
 def sweep_exit(report: SweepReport) -> int:
-    return 130 if report.interrupted else (0 if report.ok else 1)
+    return interrupts.exit_code() if report.interrupted else (0 if report.ok else 1)
+
+
+def status_exit(status: Status) -> int:
+    """The exit code of a run's status: :data:`EXIT_CODES`, 143 for a run interrupted by SIGTERM."""
+    return interrupts.exit_code() if status == Status.INTERRUPTED else EXIT_CODES.get(status, 1)
 
 
 WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="Local cluster size (default: one process per core).")]

@@ -17,7 +17,7 @@ from ..engine.simulate import run as run_model
 from ..model.config import ConfigError, load_config
 from ..results.io import write_dataset
 from ..results.schema import Status, summary
-from .common import EXIT_CODES, BackendOpt, ProgressOpt, err, fail, out
+from .common import BackendOpt, ProgressOpt, err, fail, out, status_exit
 
 
 def run(
@@ -75,7 +75,7 @@ def run(
         err.print(f"{info['status']}: {info['message']}", markup=False, highlight=False, soft_wrap=True)
     elif info["message"]:
         err.print(f"note: {info['message']}", markup=False, highlight=False, soft_wrap=True)
-    raise typer.Exit(EXIT_CODES.get(info["status"], 1))
+    raise typer.Exit(status_exit(info["status"]))
 
 
 def _print_summary(info: dict, path: Path | None) -> None:

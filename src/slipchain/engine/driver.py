@@ -13,10 +13,12 @@ Loop order (each chunk), as in hoomd's ``Simulation.run``:
 6. each live row's control decides: ``diverged`` if the kernel flagged a non-finite state, else
    stop at its length limit or once converged; a finished row is marked for the kernel to skip;
 7. the checkpointer, if any, writes the state when its interval has passed (:mod:`.checkpoint`):
-   here, and only here, the batch, the controls and the recorder agree.
+   here, and only here, the batch, the controls and the recorder agree;
+8. a stop asked for by a signal (:func:`.interrupts.check`) ends the loop as Ctrl-C does.
 
 Ctrl-C (KeyboardInterrupt) during the loop stops every active row with status ``interrupted``:
-what was simulated is kept and returned like a finished run.
+what was simulated is kept and returned like a finished run. So does SIGTERM where
+:func:`.interrupts.sigterm_as_interrupt` is installed (the command line).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..results.schema import Status
+from . import interrupts
 from . import scheme as S
 from .backends.base import Backend, Batch
 from .control import RowControl
@@ -41,6 +44,7 @@ def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_
     :class:`~.checkpoint.Checkpointer`) is told after every chunk, and writes a final checkpoint
     when every row has finished (not when interrupted: the last periodic one stays).
     """
+    interrupts.REQUESTED.clear()  # a signal of an earlier run in this process is not this run's
     try:
         while any(c.active for c in controls):
             live = [i for i, c in enumerate(controls) if c.active]
@@ -72,10 +76,11 @@ def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_
                     checkpoint.after_chunk()
                 else:
                     checkpoint.save()
+            interrupts.check()  # a Ctrl-C or SIGTERM whose KeyboardInterrupt a finalizer swallowed
     except KeyboardInterrupt:
         for c in controls:
             if c.active:
-                c.stop(Status.INTERRUPTED, f"interrupted by the user at t = {c.n * interval:.6e} s")
+                c.stop(Status.INTERRUPTED, f"interrupted by {interrupts.who()} at t = {c.n * interval:.6e} s")
     finally:
         for obs in observers:
             obs.close()

@@ -70,6 +70,18 @@ def _poly_fit(tau: np.ndarray, x: np.ndarray, deg: int) -> tuple[np.ndarray, np.
     return coef, cov, resid
 
 
+def _sd(variance: float) -> float:
+    """The standard deviation of a fitted coefficient from its variance. A trace the polynomial fits
+    exactly (a run that slides at constant velocity to the last bit) has a variance of zero, which
+    the pseudo-inverse returns as a round-off of either sign: that is zero, not a NaN."""
+    return float(np.sqrt(max(float(variance), 0.0)))
+
+
+def _in_se(value: float, se: float) -> str:
+    """``value`` in units of its standard error, for a message (a fit without noise has none)."""
+    return f"{value / se:.1f} SE" if se > 0 else "a fit without noise"
+
+
 def _lag1(resid: np.ndarray) -> float:
     r = resid - resid.mean()
     den = float(r @ r)
@@ -93,15 +105,15 @@ def steady_velocity(t: np.ndarray, x: np.ndarray, rel_tol: float = REL_TOL) -> V
         W = tt[-1] - tt[0]
         coef, cov, _ = _poly_fit(tt - mid, xx, 2)
         b, c = coef[1], coef[2]
-        dv, se_dv = 2 * c * W, 2 * W * np.sqrt(cov[2, 2])
-        moving = b > SIGMAS * np.sqrt(cov[1, 1])
+        dv, se_dv = 2 * c * W, 2 * W * _sd(cov[2, 2])
+        moving = b > SIGMAS * _sd(cov[1, 1])
         last = (moving, b, dv, se_dv, W)
         if moving and (abs(dv) <= rel_tol * b or abs(dv) <= SIGMAS * se_dv):
             lin, lcov, resid = _poly_fit(tt - mid, xx, 1)
             rho = _lag1(resid)
             inflate = np.sqrt((1 + rho) / (1 - rho)) if 0 < rho < 1 else 1.0
             drift = dv / np.sqrt(12.0) if abs(dv) > SIGMAS * se_dv else 0.0  # a real (significant) drift
-            sem = float(np.hypot(np.sqrt(lcov[1, 1]) * inflate, drift))
+            sem = float(np.hypot(_sd(lcov[1, 1]) * inflate, drift))
             return VelocityFit(OK, float(lin[1]), sem, float(t_k), int(tt.size),
                                f"steady from t = {t_k:.4g} s ({tt.size} points); velocity change over the window "
                                f"{dv / b:+.1%}", float(dv / b))
@@ -114,10 +126,10 @@ def steady_velocity(t: np.ndarray, x: np.ndarray, rel_tol: float = REL_TOL) -> V
                            f"significantly above 0)")
     if dv > 0:
         return VelocityFit(RUNAWAY, float("nan"), float("nan"), float("nan"), 0,
-                           f"runaway: the velocity still rises by {dv / b:+.0%} ({dv / se_dv:.1f} SE) over the last "
+                           f"runaway: the velocity still rises by {dv / b:+.0%} ({_in_se(dv, se_dv)}) over the last "
                            f"{W:.3g} s, as above the maximum of mu(v)")
     return VelocityFit(NO_STEADY, float("nan"), float("nan"), float("nan"), 0,
-                       f"no steady sliding: the velocity changes by {dv / b:+.0%} ({dv / se_dv:.1f} SE) over the "
+                       f"no steady sliding: the velocity changes by {dv / b:+.0%} ({_in_se(dv, se_dv)}) over the "
                        f"last {W:.3g} s")
 
 

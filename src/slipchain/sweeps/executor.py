@@ -48,6 +48,7 @@ from typing import Iterator
 import xarray as xr
 
 from .._version import __version__
+from ..engine import interrupts
 from ..engine.backends import BackendName
 from ..engine.checkpoint import CheckpointError
 from ..engine.memory import check_memory
@@ -173,7 +174,7 @@ def dask_client(scheduler: str | None = None, n_workers: int | None = None,
             yield client
         return
     with LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=threads_per_worker, processes=True,
-                      host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR) as cluster:
+                      host="127.0.0.1", dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR) as cluster:
         with Client(cluster) as client:
             yield client
 
@@ -293,7 +294,9 @@ def _check_interrupt() -> None:
 
 @contextmanager
 def _interrupt_flag() -> Iterator[None]:
-    """While the sweep runs, SIGINT also sets a flag that the driver checks between tasks.
+    """While the sweep runs, SIGINT, and SIGTERM as a batch scheduler sends it at a job's time limit
+    (:mod:`slipchain.engine.interrupts`), raise KeyboardInterrupt and set a flag that the driver
+    checks between tasks.
 
     Python runs a signal handler in the main thread at the next bytecode, wherever that is; when it
     is inside a finalizer (a Dask future's ``__del__``, say) the KeyboardInterrupt it raises is
@@ -304,17 +307,19 @@ def _interrupt_flag() -> Iterator[None]:
         yield
         return
     _INTERRUPTED.clear()
-    previous = signal.getsignal(signal.SIGINT)
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
 
     def handler(signum, frame):
         _INTERRUPTED.set()
-        raise KeyboardInterrupt
+        interrupts.raise_interrupt(signum, frame)
 
-    signal.signal(signal.SIGINT, handler)
+    for sig in previous:
+        signal.signal(sig, handler)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, old in previous.items():
+            signal.signal(sig, old)
         _INTERRUPTED.clear()
 
 
