@@ -6,14 +6,11 @@ chunks) -> observables and the run Dataset (``results``) -> store (``sweeps``) -
 plots; ``workflows`` chain them into jobs and ``cli`` exposes them. See docs/architecture.md.
 """
 
-from . import _moved
 from ._version import __version__
 from .engine import BackendName, run, simulate, simulate_batch
 from .model import Config, ConfigError, ContactLaw, State, System, build_system, initial_state, load_config, make_config
 from .results import Status, read_dataset, summary, write_dataset
 from .sweeps import open_sweep, run_sweep
-
-_moved.install()
 
 __all__ = [
     "BackendName",

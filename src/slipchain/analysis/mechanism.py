@@ -1,6 +1,6 @@
 """The mechanism behind the load effect: stick-slip per contact, slip events, velocity spectra.
 
-The paper explains the fall of mu_star with theta by contacts that stick-slip together (MODEL.md,
+The paper explains the fall of mu_star with theta by contacts that stick-slip together (docs/model.md,
 "Mechanism"). This module measures that.
 
 **Stick-slip per contact.** During steady sliding a contact either follows the drive (its velocity

@@ -28,7 +28,7 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
         "# Reproduction of Fig. 6: friction versus load",
         "",
         "Braun, Steenwyk, Warhadpande and Persson, \"On the dependency of friction on load: Theory and experiment\", "
-        "EPL 113, 56002 (2016), two-chain model as in MODEL.md.",
+        "EPL 113, 56002 (2016), two-chain model as in docs/model.md.",
         "",
         f"- Command: `{command}`",
         f"- Sweep `{ds.attrs.get('sweep_name')}` (digest {ds.attrs.get('sweep_digest')}): {n_done} of {n_total} members "

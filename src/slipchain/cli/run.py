@@ -21,7 +21,7 @@ from .common import BackendOpt, ProgressOpt, err, fail, out, status_exit
 
 
 def run(
-    config: Annotated[Optional[Path], typer.Argument(help="TOML file with parameters (MODEL.md names, SI units).")] = None,
+    config: Annotated[Optional[Path], typer.Argument(help="TOML file with parameters (docs/model.md names, SI units).")] = None,
     set_: Annotated[list[str], typer.Option("--set", help="Override one parameter: name=value (repeatable).")] = [],
     out_path: Annotated[Optional[Path], typer.Option("--out", help="Write the result Dataset to this NetCDF file.")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object with the headline numbers.")] = False,

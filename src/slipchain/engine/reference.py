@@ -2,7 +2,7 @@
 
 State vector [x (N), X (N), u (N), U (N), F], with F(t) = integral of f_d from 0 to t, so that the
 mean driving force over any output interval is a difference of F: exactly what the kernel
-records. Written directly from the equations of motion in :mod:`slipchain.kernel`'s docstring,
+records. Written directly from the equations of motion in :mod:`slipchain.engine.scheme`'s docstring,
 sharing no code with the kernel (the contact law comes from :class:`ContactLaw`).
 """
 

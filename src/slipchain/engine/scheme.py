@@ -5,7 +5,7 @@ The functions here are plain Python; each backend compiles them for its target
 with ``numba.cuda.jit(device=True)`` (:mod:`.backends.cuda`). The batch loops that call them live
 in the backends.
 
-Equations of motion (MODEL.md; Fig. 4 of the paper), periodic in i:
+Equations of motion (docs/model.md; Fig. 4 of the paper), periodic in i:
 
     m   du_i/dt = K  (x_{i+1} + x_{i-1} - 2 x_i) + K_T (X_i - x_i)
                   - m eta (3 u_i - u_{i+1} - u_{i-1} - U_i) - f(u_i, v*_i) [if i carries a contact]

@@ -5,7 +5,7 @@ config -> system (disorder from the seed) -> start state -> batch -> the one tim
 :class:`.observers.Recorder`) -> the run Dataset (:func:`slipchain.results.schema.assemble_run`:
 MSER transient, mu_star with its batch-means error, physics checks).
 
-mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (MODEL.md, "Start and measurement").
+mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (docs/model.md, "Drive, start and measurement").
 Where the run is computed is an argument (``backend``: 'cpu', 'gpu', 'auto' or a backend object),
 never part of the config: the same config gives the same physics on every backend.
 """

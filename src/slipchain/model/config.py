@@ -1,4 +1,4 @@
-"""Validated, frozen run configuration: every parameter of MODEL.md under its name, SI units.
+"""Validated, frozen run configuration: every parameter of docs/model.md under its name, SI units.
 
 A config is read from a flat TOML file and overridden by ``name=value`` strings (the CLI's
 ``--set``). Anything wrong (an unknown key, a non-number, a value out of range) raises
@@ -90,12 +90,12 @@ class ConfigError(ValueError):
 
 
 class Config(BaseModel):
-    """All parameters of one run (MODEL.md names; defaults are the paper's values).
+    """All parameters of one run (docs/model.md names; defaults are the paper's values).
 
     Model: ``a`` (a), ``rho`` (rho), ``E`` (E), ``nu`` (nu), ``N_L`` (N_L), ``N`` (N),
     ``tau_f`` (tau_f), ``c`` (c), ``v0`` (v_0), ``delta`` (delta), ``epsilon`` (varepsilon),
     ``eta`` (eta, 0.3*omega0), ``eta_c`` (eta_c; default 0.1*omega0), ``theta`` (theta),
-    ``v_d`` (v, the drive velocity), ``start`` ('rest' or 'steady', MODEL.md "Start").
+    ``v_d`` (v, the drive velocity), ``start`` ('rest' or 'steady', docs/model.md, "Drive, start and measurement").
     ``dead_weight``: None (default) drives the upper layer through the springs K_d at v_d; a
     number mu_a replaces them by a constant force F_b = mu_a*epsilon*f0*theta on every upper block
     (a hanging weight, as in the experiment): mu_a is the applied mu_star, and the run measures
@@ -323,7 +323,7 @@ class Config(BaseModel):
                                       f"springs and damping together (linear analysis of the scheme per mode; "
                                       f"geometry = '{self.geometry}', {drive}); leave dt out for the default"))
 
-    # --- derived quantities (MODEL.md tables) -------------------------------------------
+    # --- derived quantities (docs/model.md tables) -------------------------------------------
     @property
     def n_blocks(self) -> int:
         """Interface blocks: N for the chain, N*Ly (Lx = N along x) for the 2-D geometries."""

@@ -83,7 +83,7 @@ class ContactLaw:
         """max over u > v* of -df/du (without the damping term) [N s/m].
 
         The weakening branch sets the largest time step for which the per-contact implicit
-        equation m*u + dt*f(u) = r has a single root (MODEL.md, numerical facts).
+        equation m*u + dt*f(u) = r has a single root (docs/numerics.md).
         """
         y = np.linspace(1e-6, 20.0, 200_001)
         slope = 2.0 * self.c * y * np.exp(-self.c * y * y - LN10 * y) / LN10

@@ -3,7 +3,7 @@
 Interface layer (IL): N cubes of mass m, displacements x_i, velocities u_i.
 Upper layer (UL): N parallelepipeds of mass N_L*m, displacements X_i, velocities U_i.
 N_c = round(theta*N) distinct IL blocks carry one frictional contact each, with
-log10(v*_i) uniform on [log10 v0 - delta, log10 v0 + delta] (MODEL.md, "Frictional contacts").
+log10(v*_i) uniform on [log10 v0 - delta, log10 v0 + delta] (docs/model.md, "Frictional contacts").
 
 The 2-D geometries (``config.geometry``, issue 13) have N*Ly interface blocks on an (Lx = N, Ly)
 periodic grid, stored flat in row-major order: block (ix, iy) is index ix*Ly + iy, so x-neighbours
@@ -95,7 +95,7 @@ def dead_weight_force(system: System) -> float:
 
 
 def mu_star_norm(system: System) -> float:
-    """epsilon*f0*theta with the realised theta = N_c/N: f_d / this = mu_star (MODEL.md).
+    """epsilon*f0*theta with the realised theta = N_c/N: f_d / this = mu_star (docs/model.md).
 
     Without contacts mu_star is undefined; the series is then normalised by epsilon*f0 alone
     (for the transient and error estimates) and mu_star is reported as NaN.
@@ -119,7 +119,7 @@ class State:
 
 
 def initial_state(system: System) -> State:
-    """The start chosen by ``config.start`` (MODEL.md, "Start and measurement").
+    """The start chosen by ``config.start`` (docs/model.md, "Drive, start and measurement").
 
     rest: every block at rest at its site; the drive starts at 0 and moves at v_d.
     steady: every block moves at v_d; X_i = -F/K_d and x_i = X_i - F/K_T with

@@ -5,7 +5,7 @@ holds; the assembly (:func:`assemble_run`), the sweep store's per-member summary
 (:data:`SWEEP_VARIABLES`), the CLI's summary (:data:`SUMMARY_KEYS`) and the docs
 (:func:`schema_markdown`, docs/run-schema.md) all read it.
 
-mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (MODEL.md, "Start and measurement"),
+mu_star = <f_d>_t / (epsilon*f0*theta), theta = N_c/N (docs/model.md, "Drive, start and measurement"),
 averaged over the steady window found by MSER (:mod:`slipchain.results.observables`).
 """
 
