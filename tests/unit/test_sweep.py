@@ -165,3 +165,25 @@ def test_store_files_and_dataset_statuses(tmp_path):
     assert st.failed_ids() == set() and st.completed_ids() == {m_ok.id, m_err.id}
     index = (st.write_index()).read_text().splitlines()
     assert len(index) == 1 + len(sw.members) and index[0].startswith("member_id,theta,seed,status")
+
+
+def test_every_shipped_preset_is_catalogued_and_found_by_name(tmp_path, monkeypatch):
+    """Issue 30: the catalogue (slipchain presets) lists exactly the shipped files, a sweep's run count
+    is its number of members, and a name is found from any folder (a path still wins)."""
+    from slipchain.sweeps.catalogue import CATALOGUE, find_study, preset_files
+    from slipchain.workflows.dead_weight import load_plan
+
+    files = preset_files()
+    assert set(files) == set(CATALOGUE)
+    for name, path in files.items():
+        study = CATALOGUE[name]
+        assert study.kind in ("study", "validation", "plan") and study.purpose and study.wall_2_cores
+        if study.kind == "plan":
+            load_plan(path)
+        else:
+            assert len(load_sweep_definition(path).members) == study.runs, name
+    monkeypatch.chdir(tmp_path)
+    assert find_study("fig6-3d") == files["fig6-3d"] == find_study("fig6-3d.toml")
+    assert find_study("quick") == files["fig6-quick"] and find_study("nonesuch") is None
+    (tmp_path / "quick").write_text("")
+    assert find_study("quick").resolve() == (tmp_path / "quick").resolve()

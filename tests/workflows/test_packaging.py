@@ -88,6 +88,17 @@ def test_the_wheel_in_a_fresh_venv_runs_a_model_and_finds_its_presets(dist, tmp_
     assert where.returncode == 0, where.stderr
     module, counts = where.stdout.split("\n")[:2]
     assert Path(module).is_relative_to(venv) and counts == "60 368"  # the installed copy, with its presets
+    # Issue 30: every study by name, from an empty folder outside the repository
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    for args, words in ((["presets"], "validation campaign"),
+                        (["sweep", "fig6-3d", "--store", "x", "--dry-run"], "100 would run"),
+                        (["sweep", "quick", "--store", "q", "--dry-run"], "60 would run"),
+                        (["mu-max", "mu-max", "--out", "m", "--dry-run"], "Nothing run or written")):
+        r = subprocess.run([str(exe), *args], capture_output=True, text=True, env={**env, "COLUMNS": "200"}, cwd=empty,
+                           timeout=300)
+        assert r.returncode == 0 and words in r.stdout, (args, r.stdout, r.stderr)
+    assert not list(empty.iterdir())  # dry runs write nothing
     run = subprocess.run([str(exe), "run", "--set", "N=31", "--set", "theta=0.5", "--set", "start=steady",
                           "--set", "v0=0.01", "--set", "delta=0.2", "--set", "t_total=3e-3", "--json"],
                          capture_output=True, text=True, env=env, timeout=300)

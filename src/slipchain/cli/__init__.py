@@ -1,7 +1,8 @@
 """The command line: one module per command group; each command parses, calls one library function, prints.
 
 * ``slipchain run [CONFIG.toml] [--set name=value ...] [--out FILE.nc] [--json] [--backend cpu|gpu|auto]``: one run.
-* ``slipchain sweep SWEEP.toml --store PATH [--scheduler ADDRESS] [--workers N] [--backend ...]``: a sweep on Dask.
+* ``slipchain sweep SWEEP.toml|NAME --store PATH [--scheduler ADDRESS] [--workers N] [--backend ...] [--dry-run]``:
+  a sweep on Dask (NAME: a shipped preset, ``slipchain presets`` lists them).
 * ``slipchain reproduce [--preset quick|paper|fold|eps1|eps1-check|eps01|adaptive] [--store PATH] [--out DIR]``: the main job.
 * ``slipchain mechanism --store PATH``; ``slipchain figure fig5|fig6|mechanism|velocity|epsilon|dead-weight|tester``;
   ``slipchain tester analyze|synth``.
@@ -22,7 +23,7 @@ from .common import EXIT_CODES, show_warnings
 from .dead_weight import mu_max
 from .figure import figure_app
 from .run import run
-from .sweep import mechanism, print_sweep_report, reproduce, sweep
+from .sweep import mechanism, presets, print_sweep_report, reproduce, sweep
 from .tester import tester_app
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -54,6 +55,7 @@ app.command()(mechanism)
 app.add_typer(tester_app, name="tester")
 app.command()(reproduce)
 app.command("mu-max")(mu_max)
+app.command()(presets)
 
 
 def main() -> None:  # pragma: no cover - console entry point

@@ -9,12 +9,13 @@ import typer
 from rich.table import Table
 
 from ..model.config import ConfigError
+from ..sweeps.catalogue import find_study, missing_message
 from .common import BackendName, BackendOpt, WorkersOpt, fail, out, wrote
 
 
 def mu_max(
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory (mu_max.csv, mu_max_summary.csv, evaluations.csv, plan.toml, cache/).")],
-    plan: Annotated[Optional[Path], typer.Argument(help="A mu-max plan ([base] config and [bisection] settings, e.g. presets/mu-max.toml), or a flat base config.")] = None,
+    plan: Annotated[Optional[Path], typer.Argument(help="A mu-max plan ([base] config and [bisection] settings), the name of a shipped one (mu-max), or a flat base config.")] = None,
     set_: Annotated[list[str], typer.Option("--set", help="Override one base parameter: name=value (repeatable).")] = [],
     theta: Annotated[Optional[list[float]], typer.Option("--theta", help="Load values (repeatable). [default: plan's, else 0.1 and 1]")] = None,
     seeds: Annotated[Optional[int], typer.Option("--seeds", help="Realisations per theta (seeds 0..n-1). [default: plan's, else 4]")] = None,
@@ -23,12 +24,25 @@ def mu_max(
     tol: Annotated[Optional[float], typer.Option("--tol", help="Resolution of mu_max. [default: plan's, else 0.005]")] = None,
     workers: WorkersOpt = None,
     backend: BackendOpt = BackendName.CPU,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the plan, say what it would bisect, and stop: "
+                                          "nothing is run or written.")] = False,
 ) -> None:
     """mu_max(theta) under a dead weight by bisection over mu_a, on a local Dask cluster; resumable (OUT/cache)."""
     from ..workflows.dead_weight import BracketError, load_plan, run_plan
 
+    if plan is not None:
+        found = find_study(plan)
+        if found is None:
+            fail(missing_message("mu-max plan", plan))
+        plan = found
     try:
         the_plan = load_plan(plan, set_, theta=theta or None, seeds=seeds, lo=lo, hi=hi, tol=tol)
+        if dry_run:
+            out.print(f"mu-max plan {the_plan.name!r}: theta {list(the_plan.theta)}, {the_plan.seeds} seed(s) each, "
+                      f"mu_a bisected in [{the_plan.lo:g}, {the_plan.hi:g}] to {the_plan.tol:g}"
+                      + (f", curve points {list(the_plan.curve)}" if the_plan.curve else "")
+                      + f"; results would go to {out_dir}. Nothing run or written (--dry-run).")
+            return
         result = run_plan(the_plan, out_dir, n_workers=workers, backend=backend)
     except ConfigError as e:  # rejected before anything ran: nothing written
         fail(str(e))

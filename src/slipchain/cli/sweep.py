@@ -12,13 +12,15 @@ from rich.table import Table
 
 from ..engine.backends import BackendName
 from ..results.schema import Status
+from ..sweeps.catalogue import CATALOGUE, find_study, missing_message, preset_files
 from ..sweeps.definition import Preset, SweepError, load_sweep_definition
 from ..sweeps.executor import SWEEP_CHECKPOINT_EVERY, SweepReport, run_sweep
 from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, sweep_exit
 
 
 def sweep(
-    definition: Annotated[Path, typer.Argument(help="Sweep TOML: [base] config plus [[grid]] tables of value lists.")],
+    definition: Annotated[Path, typer.Argument(help="Sweep TOML ([base] config plus [[grid]] tables of value lists), or "
+                                              "the name of a shipped preset (`slipchain presets`).")],
     store: Annotated[Path, typer.Option("--store", help="Store directory (created; rerun to resume).")],
     scheduler: SchedulerOpt = None,
     workers: WorkersOpt = None,
@@ -32,6 +34,7 @@ def sweep(
                                           "and stop: nothing is computed or written.")] = False,
 ) -> None:
     """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
+    definition = _study(definition)
     if dry_run:
         _dry_run(definition, store)
         return
@@ -42,6 +45,29 @@ def sweep(
         fail(str(e))
     print_sweep_report(report)
     raise typer.Exit(sweep_exit(report))
+
+
+def _study(given: Path) -> Path:
+    """A sweep file as given, else the shipped preset of that name (exit 2 if neither)."""
+    found = find_study(given)
+    if found is None:
+        fail(missing_message("sweep file", given))
+    return found
+
+
+def presets() -> None:
+    """List the shipped presets by name: what each is for, its runs and its wall time on 2 cores."""
+    files = preset_files()
+    table = Table(title="slipchain presets (run by name: slipchain sweep NAME, slipchain mu-max NAME)")
+    for col in ("name", "kind", "runs", "wall on 2 cores", "purpose"):
+        table.add_column(col, justify="right" if col == "runs" else "left")
+    for name in sorted(files, key=lambda n: (CATALOGUE[n].kind != "study", CATALOGUE[n].kind, n)):
+        s = CATALOGUE[name]
+        short = name.removeprefix("fig6-")
+        alias = f" (reproduce --preset {short})" if short in {p.value for p in Preset} else ""
+        table.add_row(name + alias, "validation campaign" if s.kind == "validation" else s.kind, str(s.runs),
+                      s.wall_2_cores, s.purpose)
+    out.print(table)
 
 
 def _dry_run(definition: Path, store: Path) -> None:

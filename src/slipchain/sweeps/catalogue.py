@@ -1,0 +1,83 @@
+"""The studies that ship with slipchain, found by name (issue 30).
+
+Every TOML file in the package's ``presets/`` folder is a study: a sweep (``[base]`` and
+``[[grid]]``, run by ``slipchain sweep NAME``, or by ``slipchain reproduce --preset SHORT`` for the
+Fig. 6 family) or a mu-max plan (``[bisection]``, run by ``slipchain mu-max NAME``). A name is the
+file's stem (``fig6-3d``, ``mu-max``); the Fig. 6 family also answers to the short names of
+``reproduce --preset`` (``quick`` for ``fig6-quick``). :data:`CATALOGUE` says what each is for: a
+study of the model, the paper's figure, or a validation campaign (a numerical check of the
+integrators, not a result about friction), with its run count and the wall time it took on 2 cores
+(the page that records it is named). ``slipchain presets`` prints the table; a test keeps it equal
+to the files.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class Study:
+    """One shipped preset: its kind ('study', 'validation' or 'plan'), its run count, the wall time it
+    took on 2 cores (as recorded on the page ``source``) and its purpose in a line."""
+
+    kind: str
+    runs: int
+    wall_2_cores: str
+    source: str
+    purpose: str
+
+
+CATALOGUE: dict[str, Study] = {
+    "fig6-quick": Study("study", 60, "1 min", "docs/performance.md",
+                        "Fig. 6 at a glance: the main job (`make run`)"),
+    "fig6-paper": Study("study", 368, "4 min", "docs/performance.md", "Fig. 6 in full, with time-step and length checks"),
+    "fig6-eps1": Study("study", 56, "23 min", "docs/fig6-eps1/index.md",
+                       "Fig. 6 at the physical contact stiffness, epsilon = 1"),
+    "fig6-3d": Study("study", 100, "29 min", "docs/fig6-3d/index.md",
+                     "Fig. 6 on a 2-D interface: the 2-D chains and an elastic slab"),
+    "epsilon": Study("study", 24, "23 min", "docs/mechanism/epsilon-index.csv",
+                     "the load effect against the contact stiffness epsilon"),
+    "velocity": Study("study", 66, "4 min", "docs/mechanism/velocity-index.csv", "mu_star(v_d) at several loads"),
+    "dead-weight": Study("study", 14, "2 min", "docs/mechanism/dead-weight-index.csv",
+                         "the slider under a hanging weight: velocity or runaway"),
+    "mu-max": Study("plan", 130, "42 min", "docs/mu-max/index.md",
+                    "mu_max(theta) under a dead weight by bisection, the tester's observable"),
+    "fig6-fold": Study("validation", 48, "1.4 min", "docs/fold-convergence/report.md",
+                       "the fold-aware step at three dt against dt = 1e-8 s"),
+    "fig6-adaptive": Study("validation", 32, "1.3 min", "docs/numerics.md",
+                           "the adaptive step against the fixed step at epsilon = 1e-2"),
+    "fig6-eps01": Study("validation", 32, "15 min", "docs/numerics.md",
+                        "the adaptive step against the fixed step at epsilon = 0.1"),
+    "fig6-eps1-check": Study("validation", 36, "12 min", "docs/numerics.md",
+                             "epsilon = 1: a tolerance ten times tighter; rest against steady start"),
+}
+
+
+def preset_files() -> dict[str, Path]:
+    """Every shipped preset file by name (its stem)."""
+    folder = resources.files("slipchain") / "presets"
+    return {Path(str(p)).stem: Path(str(p)) for p in folder.iterdir() if str(p).endswith(".toml")}
+
+
+def find_study(name_or_path: str | Path) -> Path | None:
+    """The file a command was given: an existing path as it is, else the shipped preset of that name
+    (its stem, with or without '.toml'; the Fig. 6 family also by ``reproduce``'s short name);
+    None if neither exists."""
+    path = Path(name_or_path)
+    if path.exists():
+        return path
+    name = path.name[:-5] if path.name.endswith(".toml") else path.name
+    files = preset_files()
+    return files.get(name) or files.get(f"fig6-{name}")
+
+
+def missing_message(what: str, given: str | Path) -> str:
+    """The error for a study that is neither a file nor a shipped name."""
+    return (f"{what} {str(given)!r} is neither a file nor the name of a shipped preset; shipped: "
+            f"{', '.join(sorted(preset_files()))} (`slipchain presets` lists them)")
+
+
+__all__ = ["CATALOGUE", "Study", "find_study", "missing_message", "preset_files"]
