@@ -85,3 +85,17 @@ def test_every_code_block_of_getting_started_runs_as_written(tmp_path):
     finally:
         os.chdir(cwd)
     assert (tmp_path / "first.nc").exists() and (tmp_path / "first-store" / "members").is_dir()
+
+
+def test_every_page_of_the_site_has_its_own_title():
+    """Issue 30: the navigation listed six pages titled "Reproduction of Fig. 6: friction versus load"
+    (the reports of different presets); each report now names its sweep."""
+    titles: dict[str, list[str]] = {}
+    for page in (ROOT / "docs").rglob("*.md"):
+        if "_build" in page.parts:
+            continue
+        first = next((line for line in page.read_text().splitlines() if line.startswith("# ")), None)
+        if first is not None:
+            titles.setdefault(first, []).append(str(page.relative_to(ROOT)))
+    repeated = {t: p for t, p in titles.items() if len(p) > 1}
+    assert not repeated, repeated

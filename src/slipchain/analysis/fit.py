@@ -424,7 +424,7 @@ def predicts_fall(f: FitResult) -> str:
 
 
 def fit_markdown(fits: list[FitResult], runs_source: str, maxima: ModelMaxima, truth: dict | None = None) -> str:
-    lines = ["# The model fitted to tester data", "",
+    lines = [f"# The model fitted to tester data: {runs_source}", "",
              f"Runs: `{runs_source}`. Model maxima: `{maxima.source}` (theta {', '.join(f'{t:g}' for t in maxima.theta)}: "
              f"r = {', '.join(f'{r:.4f}' for r in maxima.r)}). Method: `slipchain.analysis.fit` (least squares on the "
              "mean-field rising branch and the model's maxima; 95 % CIs).", ""]

@@ -25,7 +25,7 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
     n_done = int((ds["status"] == Status.COMPLETED).sum())
     n_total = int((ds["status"] != "absent").sum())
     lines = [
-        "# Reproduction of Fig. 6: friction versus load",
+        f"# Reproduction of Fig. 6 ({ds.attrs.get('sweep_name')}): friction versus load",
         "",
         "Braun, Steenwyk, Warhadpande and Persson, \"On the dependency of friction on load: Theory and experiment\", "
         "EPL 113, 56002 (2016), two-chain model as in docs/model.md.",

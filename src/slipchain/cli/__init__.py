@@ -4,8 +4,10 @@
 * ``slipchain sweep SWEEP.toml|NAME --store PATH [--scheduler ADDRESS] [--workers N] [--backend ...] [--dry-run]``:
   a sweep on Dask (NAME: a shipped preset, ``slipchain presets`` lists them).
 * ``slipchain reproduce [--preset quick|paper|fold|eps1|eps1-check|eps01|adaptive] [--store PATH] [--out DIR]``: the main job.
-* ``slipchain mechanism --store PATH``; ``slipchain figure fig5|fig6|mechanism|velocity|epsilon|dead-weight|tester``;
-  ``slipchain tester analyze|synth``.
+* ``slipchain mu-max [PLAN.toml|NAME] --out DIR [--dry-run]``: mu_max(theta) under a dead weight by bisection.
+* ``slipchain presets``: the shipped presets and plans by name, with their purpose, runs and wall time.
+* ``slipchain mechanism --store PATH``; ``slipchain figure ...`` (``slipchain figure --help`` lists the figures);
+  ``slipchain tester analyze|synth|fit``.
 
 Exit codes: 0 completed; 1 diverged or some members failed (results are still written, with
 their messages); 2 rejected input (nothing written); 130 interrupted by Ctrl-C, 143 by SIGTERM
