@@ -59,7 +59,12 @@ def run(
         # checkpoint; a run too large for the memory (MemoryEstimateError)
         fail(str(e))
     if out_path is not None:
-        write_dataset(ds, out_path)
+        try:
+            write_dataset(ds, out_path)
+        except OSError as e:  # a full disk: one line, no partial file; the checkpoint, if any, is kept
+            keep = (f"the checkpoint {checkpoint} is kept: free space and run the same command to resume"
+                    if checkpoint is not None else "free space and run again")
+            fail(f"could not write {out_path}: {e.strerror or e}; no partial file is left; {keep}", code=1)
     info = summary(ds)
     if checkpoint is not None:
         if info["status"] == Status.INTERRUPTED:

@@ -14,7 +14,7 @@ from ..engine.backends import BackendName
 from ..results.schema import Status
 from ..sweeps.catalogue import CATALOGUE, find_study, missing_message, preset_files
 from ..sweeps.definition import Preset, SweepError, load_sweep_definition
-from ..sweeps.executor import SWEEP_CHECKPOINT_EVERY, SweepReport, run_sweep
+from ..sweeps.executor import SWEEP_CHECKPOINT_EVERY, StoreWriteError, SweepReport, run_sweep
 from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, sweep_exit
 
 
@@ -41,6 +41,8 @@ def sweep(
     try:
         report = run_sweep(load_sweep_definition(definition), store, scheduler=scheduler, n_workers=workers,
                            progress=progress, backend=backend, batch_size=batch_size, checkpoint_every=checkpoint_every)
+    except StoreWriteError as e:  # found while running (a full disk): what was stored is kept
+        fail(str(e), code=1)
     except SweepError as e:
         fail(str(e))
     print_sweep_report(report)
@@ -137,6 +139,8 @@ def reproduce(
     try:
         result = reproduce_job(preset, store, out_dir, scheduler=scheduler, n_workers=workers, progress=progress,
                                command=command, backend=backend)
+    except StoreWriteError as e:
+        fail(str(e), code=1)
     except SweepError as e:
         fail(str(e))
     print_sweep_report(result.sweep)

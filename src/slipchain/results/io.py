@@ -66,9 +66,37 @@ def write_csv(table: Any, path: str | os.PathLike, **to_csv: Any) -> Path:
 
 
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write ``ds`` to ``path`` (NetCDF4) atomically; returns the path."""
-    with atomic_write(path) as tmp:
-        ds.to_netcdf(tmp, engine=ENGINE)
+    """Write ``ds`` to ``path`` (NetCDF4) atomically; returns the path.
+
+    The file is made in memory and written with plain file I/O (:func:`write_bytes`), so that a
+    full disk is one OSError (ENOSPC, naming the file) and the temporary file is removed: HDF5
+    writing onto a full disk printed dozens of tracebacks and then crashed the process (issue 30).
+    Where xarray cannot make NetCDF4 in memory (before 2025) it writes the temporary file itself.
+
+    The in-memory write runs under dask's synchronous scheduler: inside a Dask worker xarray would
+    otherwise guard the write with a distributed lock named after the in-memory buffer, which the
+    scheduler does not know (RuntimeError "Semaphore or Lock ... not known"); the buffer is this
+    call's own, so no lock across processes is needed."""
+    import dask
+
+    try:
+        with dask.config.set(scheduler="synchronous"):
+            data = ds.to_netcdf(engine=ENGINE)
+    except (ValueError, TypeError, NotImplementedError):  # an xarray that writes NetCDF4 to files only
+        with atomic_write(path) as tmp:
+            ds.to_netcdf(tmp, engine=ENGINE)
+        return Path(path)
+    return write_bytes(path, data)
+
+
+def write_bytes(path: str | os.PathLike, data: bytes | memoryview) -> Path:
+    """Write ``data`` to ``path`` atomically; returns the path. A failed write (a full disk) raises
+    OSError with the destination as its filename and leaves no temporary file."""
+    try:
+        with atomic_write(path) as tmp, open(tmp, "wb") as fh:
+            fh.write(data)
+    except OSError as e:
+        raise OSError(e.errno, e.strerror or str(e), str(path)) from None
     return Path(path)
 
 

@@ -57,7 +57,7 @@ from ..model.config import Config
 from ..model.geometries import geometry_of
 from ..model.system import build_system
 from ..results.schema import Status
-from .definition import Member, SweepDefinition
+from .definition import Member, SweepDefinition, SweepError
 from .store import Store
 
 ERROR = Status.ERROR.value
@@ -128,6 +128,10 @@ class Outcome:
     mu_star: float
     mu_star_sem: float
     wall_time_s: float
+
+
+class StoreWriteError(SweepError):
+    """The store could not be written (a full disk): the sweep stopped, keeping what it had stored."""
 
 
 @dataclass
@@ -226,14 +230,22 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
     finally:
         bar.close()
         report.wall_time_s = time.perf_counter() - t0
-        st.write_index()
-        st.log_invocation({"started": started, "wall_time_s": report.wall_time_s, "ran": len(report.ran),
+        _best_effort(st.write_index)  # on a full disk the next call rewrites them: they are derived from the members
+        _best_effort(st.log_invocation, {"started": started, "wall_time_s": report.wall_time_s, "ran": len(report.ran),
                            "failed": len(report.failed), "skipped": len(report.skipped), "total": report.total,
                            "interrupted": report.interrupted, "scheduler": scheduler or ("client" if client else "local"),
                            "n_workers": n_workers or (None if scheduler or client else default_workers()),
                            "backend": str(backend), "notes": report.notes,
                            "quarantined": [mid for mid, _ in report.quarantined], "slipchain_version": __version__})
     return report
+
+
+def _best_effort(write, *args) -> None:
+    """Write a derived file (the index, a log line); on a full disk skip it: the next call rewrites it."""
+    try:
+        write(*args)
+    except OSError:
+        pass
 
 
 def _run_groups(pending: list[Member], batch_size: int | None, client, scheduler: str | None, n_workers: int | None,
@@ -272,7 +284,14 @@ def _execute(client, st: Store, groups: list[list[Member]], report: SweepReport,
                 time.sleep(POLL_S)
             for fut in ready:
                 _check_interrupt()
-                _store_task(fut, futures.pop(fut), st, report, bar)
+                group = futures.pop(fut)
+                try:
+                    _store_task(fut, group, st, report, bar)
+                except OSError as e:  # a full disk, say: stop, keeping every member already stored
+                    raise StoreWriteError(
+                        f"could not write to the store {str(st.path)!r}: {e.strerror or e} ({e.filename}); the "
+                        f"{len(report.ran)} member(s) stored by this call and every one before are kept and no "
+                        "partial file is left; free space and run the same command again to resume") from None
         _check_interrupt()
     finally:
         if futures:  # interrupted: drop the tasks still queued or running
@@ -369,5 +388,5 @@ class _SweepProgress:
             self._bar.stop()
 
 
-__all__ = ["GPU_BATCH", "GPU_THREADS", "SWEEP_CHECKPOINT_EVERY", "batches", "run_members", "Outcome", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
+__all__ = ["GPU_BATCH", "GPU_THREADS", "SWEEP_CHECKPOINT_EVERY", "batches", "run_members", "Outcome", "StoreWriteError", "SweepReport", "dask_client", "default_workers", "error_dataset", "expected_cost",
            "run_sweep"]
