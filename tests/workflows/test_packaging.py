@@ -4,14 +4,13 @@ its presets, and the wheel installed into a fresh venv runs.
 The build runs without network (``--no-isolation``: setuptools and build come from the test
 environment, both pinned in requirements.lock) on a copy of the source tree; the wheel is built
 from the sdist, so a file missing from the sdist breaks the wheel too. The fresh venv gets the
-wheel only; its dependencies are the test environment's (a path in a .pth file; the test
-environment's own editable slipchain is not on it), so no download is needed.
+wheel and only its declared dependencies (links to the test environment's copies, in a folder on
+a .pth path: no download), and runs from an empty folder.
 """
 
 import json
 import os
 import shutil
-import site
 import subprocess
 import sys
 import tarfile
@@ -64,6 +63,36 @@ def test_sdist_and_wheel_hold_the_package_its_presets_and_docs(dist):
     assert any(r.startswith("numpy") and ">=" in r for r in core) and not any("==" in r for r in core), core
 
 
+def _declared_dependencies(farm: Path) -> Path:
+    """A folder holding only what the wheel declares (its core Requires-Dist and theirs, markers
+    evaluated), as links into the test environment: no download, and nothing else of the test
+    environment (pytest, sphinx, our editable install) is importable beside the wheel, so an
+    undeclared import fails here (issue 30)."""
+    from importlib.metadata import distribution
+
+    from packaging.requirements import Requirement
+    from packaging.utils import canonicalize_name
+
+    todo = [r for r in distribution("slipchain").requires or [] if "extra ==" not in r]
+    seen: dict[str, object] = {}
+    while todo:
+        req = Requirement(todo.pop())
+        if req.marker is not None and not req.marker.evaluate({"extra": ""}):
+            continue
+        name = canonicalize_name(req.name)
+        if name in seen:
+            continue
+        seen[name] = dist = distribution(req.name)
+        todo += dist.requires or []
+    farm.mkdir()
+    for dist in seen.values():
+        root = Path(dist.locate_file(""))
+        for top in {f.parts[0] for f in dist.files or [] if f.parts[0] not in ("..", "__pycache__")}:
+            if (root / top).exists() and not (farm / top).exists() and not top.endswith(".pth"):
+                (farm / top).symlink_to(root / top)
+    return farm
+
+
 def test_the_wheel_in_a_fresh_venv_runs_a_model_and_finds_its_presets(dist, tmp_path):
     (wheel,) = dist.glob("slipchain-*-py3-none-any.whl")
     venv = tmp_path / "fresh"
@@ -74,7 +103,7 @@ def test_the_wheel_in_a_fresh_venv_runs_a_model_and_finds_its_presets(dist, tmp_
     assert r.returncode == 0, r.stderr
     purelib = subprocess.run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                              capture_output=True, text=True, check=True).stdout.strip()
-    (Path(purelib) / "_test_environment.pth").write_text("\n".join(site.getsitepackages()) + "\n")
+    (Path(purelib) / "_declared_dependencies.pth").write_text(str(_declared_dependencies(tmp_path / "deps")) + "\n")
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "PYTHONPATH": ""}
     exe = venv / "bin" / "slipchain"
 
