@@ -127,17 +127,34 @@ def _cli(*args, **kw):
                             stderr=subprocess.PIPE, text=True, **kw)
 
 
+# `slipchain run` that stops itself (SIGSTOP) right after writing its first checkpoint, so that a test
+# can kill it there whatever the machine's speed (issue 30: polling for the file raced the run's end)
+_STOP_AFTER_FIRST_CHECKPOINT = (
+    "import os, signal\n"
+    "from slipchain.engine import checkpoint as c\n"
+    "save = c.Checkpointer.save\n"
+    "def stop_after(self):\n"
+    "    save(self)\n"
+    "    if self.writes == 1:\n"
+    "        os.kill(os.getpid(), signal.SIGSTOP)\n"
+    "c.Checkpointer.save = stop_after\n"
+    "from slipchain.cli import app\n"
+    "app(prog_name='slipchain')\n")
+
+
 def test_cli_run_killed_with_sigkill_resumes_bit_for_bit(tmp_path):
     """The issue's test: ``slipchain run --checkpoint`` SIGKILLed, the same command again: the
-    result equals an uninterrupted run. Where the kill lands does not matter (any chunk)."""
+    result equals an uninterrupted run. The kill lands after the first checkpoint (the run stops
+    itself there and waits), which the resume must continue bit for bit."""
     args = ["run", "--set", "N=41", "--set", "theta=0.6", "--set", "t_total=0.02", "--set", "seed=7", "--json"]
     ckp, out, full = tmp_path / "run.ckpt", tmp_path / "resumed.nc", tmp_path / "full.nc"
-    proc = _cli(*args, "--checkpoint", str(ckp), "--checkpoint-every", "0", "--out", str(out))
-    t_end = time.time() + 300
-    while not ckp.exists() and proc.poll() is None and time.time() < t_end:
-        time.sleep(0.01)
+    proc = subprocess.Popen([sys.executable, "-c", _STOP_AFTER_FIRST_CHECKPOINT, *args, "--checkpoint", str(ckp),
+                             "--checkpoint-every", "0", "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    _, status = os.waitpid(proc.pid, os.WUNTRACED)  # returns once it has stopped itself (or ended)
+    assert os.WIFSTOPPED(status), proc.communicate()
     proc.send_signal(signal.SIGKILL)
-    assert proc.wait(timeout=60) == -signal.SIGKILL, "the run ended before its first checkpoint"
+    assert proc.wait(timeout=60) == -signal.SIGKILL
     assert ckp.exists() and not out.exists()
     resumed = _cli(*args, "--checkpoint", str(ckp), "--out", str(out))
     _, stderr = resumed.communicate(timeout=600)

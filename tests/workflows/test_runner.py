@@ -69,60 +69,149 @@ def test_resume_skips_finished_and_reruns_missing_and_failed(tmp_path, client):
     assert len(st.invocations()) == 2 and st.invocations()[1]["skipped"] == 1
 
 
-def test_worker_killed_mid_task_is_retried(tmp_path, client):
-    sw = make_sweep({"name": "k", "base": {**FAST, "t_total": SLOW_T}, "grid": {"seed": list(range(6))}})
+def _stop_once(marker: str, where: str, undo: bool = False) -> None:
+    """Run on every worker (``client.run``): the first of them to reach ``where`` ('task': the start of
+    a task; 'checkpoint': just after a task's first checkpoint) stops its own process (SIGSTOP) and
+    waits there, so that the test kills it at a known point whatever the machine's speed (issue 30:
+    the test slept 0.3 s and hoped to land inside a task). ``marker`` (created exclusively) makes it
+    the only one. ``undo``: put the originals back."""
+    import os
+    import signal
+
+    from slipchain.engine import checkpoint as c
+    from slipchain.sweeps import executor
+
+    if undo:
+        executor.run_members = getattr(executor.run_members, "original", executor.run_members)
+        c.Checkpointer.save = getattr(c.Checkpointer.save, "original", c.Checkpointer.save)
+        return
+
+    def stop() -> None:
+        try:
+            os.close(os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        except FileExistsError:
+            return
+        os.kill(os.getpid(), signal.SIGSTOP)
+
+    if where == "task":
+        run = executor.run_members
+
+        def gated(*args, **kwargs):
+            stop()
+            return run(*args, **kwargs)
+
+        gated.original = run
+        executor.run_members = gated
+    else:
+        save = c.Checkpointer.save
+
+        def gated_save(self):
+            save(self)
+            if self.writes == 1:
+                stop()
+
+        gated_save.original = save
+        c.Checkpointer.save = gated_save
+
+
+def _stopped_worker(pids: dict[str, int]) -> tuple[str, int]:
+    """The worker that has stopped itself: its (address, pid). A stopped process stays stopped, so this
+    waits for a state, not for a moment (the time limit only guards against a hang)."""
+    t_end = time.time() + 300
+    while time.time() < t_end:
+        for addr, pid in pids.items():
+            try:
+                state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+            except OSError:
+                continue
+            if state == "T":
+                return addr, pid
+        time.sleep(0.02)
+    raise AssertionError("no worker stopped itself within 300 s")
+
+
+def _kill_when_stopped(client, tmp_path, where: str) -> tuple[threading.Thread, dict]:
+    import cloudpickle
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import this test module
+    marker = str(tmp_path / f"stopped-{where}")
+    client.run(_stop_once, marker, where)
     pids = client.run(os.getpid)
-    killed = {}
+    killed: dict = {}
 
     def killer():
-        t_end = time.time() + 60
-        while time.time() < t_end and not killed:
-            busy = {w: k for w, k in client.processing().items() if k}
-            if busy:
-                time.sleep(0.3)  # well inside a task of about a second
-                addr, keys = next(iter(busy.items()))
-                if addr in pids:
-                    os.kill(pids[addr], signal.SIGKILL)
-                    killed.update(addr=addr, keys=list(keys))
-                    return
-            time.sleep(0.02)
+        addr, pid = _stopped_worker(pids)
+        os.kill(pid, signal.SIGKILL)
+        killed.update(addr=addr)
 
     th = threading.Thread(target=killer)
     th.start()
-    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
-    th.join()
-    assert killed, "no task was seen running, nothing was killed"
+    return th, killed
+
+
+def test_worker_killed_mid_task_is_retried(tmp_path, client):
+    sw = make_sweep({"name": "k", "base": {**FAST, "t_total": SLOW_T}, "grid": {"seed": list(range(6))}})
+    th, killed = _kill_when_stopped(client, tmp_path, "task")
+    try:
+        rep = run_sweep(sw, tmp_path / "s", client=client, progress=False)
+    finally:
+        th.join()
+        client.wait_for_workers(2, timeout=60)  # the nanny restarted the killed worker
+        client.run(_stop_once, "", "", True)
+    assert killed, "no worker stopped in a task, nothing was killed"
     assert rep.ok and len(rep.ran) == 6, [(o.status, o.message) for o in rep.failed]
     assert len(Store.open(tmp_path / "s").completed_ids()) == 6
-    client.wait_for_workers(2, timeout=60)  # the nanny restarted the killed worker
 
 
-def _slow_sweep(tmp_path, members):
+# The sweep driver stops itself (SIGSTOP) right after storing its k-th member, so that a test acts
+# on it at a known point whatever the machine's speed (issue 30: these tests slept and polled).
+_STOP_AFTER_MEMBERS = (
+    "import os, signal, sys\n"
+    "from slipchain.sweeps.store import Store\n"
+    "k, write, done = int(sys.argv.pop(1)), Store.write_member, []\n"
+    "def stop_after(self, member, ds):\n"
+    "    path = write(self, member, ds)\n"
+    "    done.append(member.id)\n"
+    "    if len(done) == k:\n"
+    "        os.kill(os.getpid(), signal.SIGSTOP)\n"
+    "    return path\n"
+    "Store.write_member = stop_after\n"
+    "from slipchain.cli import app\n"
+    "app(prog_name='slipchain')\n")
+
+
+def _slow_sweep(tmp_path, members, stop_after=None):
     """The command of a `slipchain sweep` of ``members`` one-second members on a 2-process local
-    cluster, its store, and the driver started in a new session (so its cluster can be killed)."""
+    cluster, its store, and the driver started in a new session (so its cluster can be killed);
+    with ``stop_after`` = k the driver stops itself once it has stored k members."""
     definition = tmp_path / "sweep.toml"
     definition.write_text(
         'name = "slow"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\nintegrator = "fixed"\n'
         f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(members)))}]\n")
     store = tmp_path / "s"
-    cmd = [sys.executable, "-m", "slipchain", "sweep", str(definition), "--store", str(store), "--workers", "2",
-           "--no-progress"]
-    return cmd, store, subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    args = ["sweep", str(definition), "--store", str(store), "--workers", "2", "--no-progress"]
+    cmd = [sys.executable, "-m", "slipchain", *args]
+    start = cmd if stop_after is None else [sys.executable, "-c", _STOP_AFTER_MEMBERS, str(stop_after), *args]
+    return cmd, store, subprocess.Popen(start, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                         start_new_session=True)
 
 
+def _wait_stopped(proc) -> None:
+    """Until the driver has stopped itself (SIGSTOP); fails if it ended instead."""
+    _, status = os.waitpid(proc.pid, os.WUNTRACED)
+    assert os.WIFSTOPPED(status), proc.communicate()
+
+
 def _interrupt_sweep(tmp_path, sig, after_members):
-    """Start `slipchain sweep` of 8 one-second members, send ``sig`` to the driver once
-    ``after_members`` are stored, then kill what is left of its process group.
-    Returns (command, store, return code, stdout)."""
-    cmd, store, proc = _slow_sweep(tmp_path, 8)
-    members = store / "members"
+    """Start `slipchain sweep` of 8 one-second members, send ``sig`` to the driver right after it has
+    stored ``after_members`` (it stops itself there), let it go on, then kill what is left of its
+    process group. Returns (command, store, return code, stdout)."""
+    cmd, store, proc = _slow_sweep(tmp_path, 8, stop_after=after_members)
     try:
-        t_end = time.time() + 120
-        while time.time() < t_end and len(list(members.glob("*.nc")) if members.exists() else []) < after_members:
-            assert proc.poll() is None, proc.communicate()
-            time.sleep(0.05)
+        _wait_stopped(proc)
         os.kill(proc.pid, sig)
+        if sig != signal.SIGKILL:
+            os.kill(proc.pid, signal.SIGCONT)  # the signal is handled as the driver resumes
         out, _ = proc.communicate(timeout=120)
     finally:
         try:
@@ -137,7 +226,7 @@ def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path):
     members = store / "members"
     assert code == -signal.SIGKILL
     survivors = sorted(p.stem for p in members.glob("*.nc"))
-    assert 2 <= len(survivors) < 8
+    assert len(survivors) == 2  # killed right after the second was stored: the others were in flight or queued
     for mid in survivors:  # every member file that exists is complete and readable
         assert read_dataset(members / f"{mid}.nc").attrs["status"] == "completed"
     mtimes = {mid: (members / f"{mid}.nc").stat().st_mtime_ns for mid in survivors}
@@ -176,7 +265,7 @@ def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
     assert code == 130, out
     assert "(interrupted)" in out
     done = list(members.glob("*.nc"))
-    assert 1 <= len(done) < 8 and all(read_dataset(p).attrs["status"] == "completed" for p in done)
+    assert len(done) == 1 and all(read_dataset(p).attrs["status"] == "completed" for p in done)
     assert Store.open(store).invocations()[-1]["interrupted"] is True
 
 
@@ -187,7 +276,7 @@ def test_sigterm_is_handled_as_ctrl_c_and_exits_143(tmp_path):
     assert code == 143, out
     assert "(interrupted)" in out
     done = list((store / "members").glob("*.nc"))
-    assert 1 <= len(done) and all(read_dataset(p).attrs["status"] == "completed" for p in done)
+    assert len(done) == 1 and all(read_dataset(p).attrs["status"] == "completed" for p in done)
     assert Store.open(store).invocations()[-1]["interrupted"] is True
     assert (store / "index.csv").exists() and not list(store.rglob("*.tmp"))
     again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)  # resumes: nothing lost
@@ -243,13 +332,11 @@ def test_ctrl_c_swallowed_in_a_finalizer_still_stops_the_sweep(tmp_path, client,
 
 def test_a_second_driver_on_the_same_store_is_refused_naming_the_holder(tmp_path):
     # Before the driver lock, both drivers ran every member (and invocations.jsonl claimed both).
-    cmd, store, first = _slow_sweep(tmp_path, 6)
+    cmd, store, first = _slow_sweep(tmp_path, 6, stop_after=1)
     try:
-        t_end = time.time() + 120
-        while not (store / "driver.json").exists() and time.time() < t_end:
-            assert first.poll() is None, first.communicate()
-            time.sleep(0.05)
+        _wait_stopped(first)  # it holds the lock, has stored one member, and waits
         second = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        os.kill(first.pid, signal.SIGCONT)
         assert second.returncode == 2, second.stdout + second.stderr
         words = " ".join(second.stderr.split())
         assert f"store '{store}' is being run by another slipchain driver" in words
@@ -280,29 +367,21 @@ def test_the_lock_of_a_killed_driver_is_taken_over_with_a_note(tmp_path, client)
 
 
 def test_worker_killed_mid_member_resumes_it_from_its_checkpoint(tmp_path, client):
-    """A long member keeps a checkpoint; its worker is SIGKILLed once the checkpoint exists; the
-    retried task resumes from it, and the stored member equals a direct run bit for bit."""
+    """A long member keeps a checkpoint; its worker is SIGKILLed right after its first checkpoint (it
+    stops itself there); the retried task resumes from it, and the stored member equals a direct run
+    bit for bit."""
     sw = make_sweep({"name": "c", "base": {**FAST, "t_total": 3 * SLOW_T}, "grid": {"seed": [3]}})
     (m,) = sw.members
     st = Store.open(tmp_path / "s", sw)
     ckpt = st.checkpoint_path([m])
-    pids = client.run(os.getpid)
-    killed = {}
-
-    def killer():
-        t_end = time.time() + 300
-        while time.time() < t_end and not ckpt.exists():
-            time.sleep(0.01)
-        busy = {w: k for w, k in client.processing().items() if k}
-        for addr in busy:
-            os.kill(pids[addr], signal.SIGKILL)
-            killed.update(addr=addr)
-
-    th = threading.Thread(target=killer)
-    th.start()
-    rep = run_sweep(sw, st, client=client, progress=False, checkpoint_every=0.5)
-    th.join()
-    assert killed, "the member's worker was not seen running after its first checkpoint"
+    th, killed = _kill_when_stopped(client, tmp_path, "checkpoint")
+    try:
+        rep = run_sweep(sw, st, client=client, progress=False, checkpoint_every=0.5)
+    finally:
+        th.join()
+        client.wait_for_workers(2, timeout=60)
+        client.run(_stop_once, "", "", True)
+    assert killed, "the member's worker did not stop after its first checkpoint"
     assert rep.ok, [(o.status, o.message) for o in rep.failed]
     stored = read_dataset(st.member_path(m.id))
     assert float(stored.attrs["resumed_at"]) > 0  # the retry resumed, it did not start over
@@ -311,7 +390,6 @@ def test_worker_killed_mid_member_resumes_it_from_its_checkpoint(tmp_path, clien
         assert (stored[k].values == direct[k].values).all(), k
     assert stored.attrs["mu_star"] == direct.attrs["mu_star"]
     assert not ckpt.exists() and not list((st.path / "checkpoints").iterdir())  # removed once stored
-    client.wait_for_workers(2, timeout=60)
 
 
 def test_stale_checkpoints_are_pruned(tmp_path, client):
