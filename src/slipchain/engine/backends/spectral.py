@@ -65,12 +65,17 @@ def body_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
         up = Ur[0]
         sf = 0.0
         su = 0.0
+        # The sums in a loop of their own, which writes nothing: in a loop that also writes un and dampx
+        # LLVM guards the vectorised body by a run-time check of the arrays' distance in memory and
+        # falls back to the scalar loop when two allocations happen to lie close, and with fastmath the
+        # two sum in different orders (seen as a resumed run differing in the last bit; issue 30).
+        for i in range(n):
+            sf += Fr[i]
+            su += ur[i]
         for i in range(n):
             d = -meta * (ur[i] - up)
             un[i] = ur[i] + dtm * (Fr[i] + d)
             dampx[i] = d
-            sf += Fr[i]
-            su += ur[i]
         unew = up + h / p[P_ML] * (p[P_FCONST] - sf / n + meta * (su / n - up))
         for i in range(n):
             Un[i] = unew
@@ -78,11 +83,12 @@ def body_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
     vd = p[P_VD]
     f_drive = k0 * vd * t  # the uniform mode's share of the drive, a**2 k(0) v_d t
     sx = 0.0
+    for i in range(n):  # the sum on its own (see the dead weight's sums above)
+        sx += xr[i]
     for i in range(n):
         d = -meta * (ur[i] - vd)
         un[i] = ur[i] + dtm * (Fr[i] + f_drive + d)
         dampx[i] = d
-        sx += xr[i]
     for i in range(n):
         Un[i] = Ur[i]
     return k0 * (n * vd * t - sx)
@@ -95,16 +101,18 @@ def body_commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     the step (the dampers act between block and plate, or block and drive)."""
     wd = 0.0
     if p[P_KD] == 0.0:
+        for i in range(xr.size):  # the work first, in a loop that writes nothing (see body_explicit)
+            wd += dampx[i] * (un[i] - Un[i])
         for i in range(xr.size):
             xr[i] += h * un[i]
             ur[i] = un[i]
-            wd += dampx[i] * (un[i] - Un[i])
             Xr[i] += h * Un[i]
             Ur[i] = Un[i]
         return wd * h
     for i in range(xr.size):
-        xr[i] += h * un[i]
         wd += dampx[i] * un[i]
+    for i in range(xr.size):
+        xr[i] += h * un[i]
         ur[i] = un[i]
     return wd * h
 
