@@ -136,10 +136,11 @@ def _refresh_solver(nc, ys, c):
 def _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt):
     """Positions from the new velocities; returns the work of the damping forces over the step."""
     wd = 0.0
+    for i in range(xr.size):  # the work in a loop that writes nothing (spectral.body_explicit says why)
+        wd += dampx[i] * un[i] + dampX[i] * Un[i]
     for i in range(xr.size):
         xr[i] += dt * un[i]
         Xr[i] += dt * Un[i]
-        wd += dampx[i] * un[i] + dampX[i] * Un[i]
         ur[i] = un[i]
         Ur[i] = Un[i]
     return wd * dt
@@ -149,12 +150,13 @@ def _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt):
 def _contact_sums(nc, fk, uk, ca, slow):
     """Accumulate per-contact force, velocity, velocity**2, slow steps; returns sum f*u."""
     p = 0.0
+    for k in range(nc):  # the sum in a loop that writes nothing (spectral.body_explicit says why)
+        p += fk[k] * uk[k]
     for k in range(nc):
         ca[C_F, k] += fk[k]
         ca[C_U, k] += uk[k]
         ca[C_U2, k] += uk[k] * uk[k]
         ca[C_SLOW, k] += 1.0 if abs(uk[k]) < slow else 0.0
-        p += fk[k] * uk[k]
     return p
 
 
