@@ -177,8 +177,11 @@ def dask_client(scheduler: str | None = None, n_workers: int | None = None,
         with Client(scheduler) as client:
             yield client
         return
+    # Logs of the local cluster: critical only. A task's failure comes back to the driver and is stored
+    # with its message (failed/); what else the workers log at ERROR is noise of a shutdown (a
+    # heartbeat that finds the scheduler gone after a full disk stopped the sweep; issue 30).
     with LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=threads_per_worker, processes=True,
-                      host="127.0.0.1", dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR) as cluster:
+                      host="127.0.0.1", dashboard_address="127.0.0.1:0", silence_logs=logging.CRITICAL) as cluster:
         with Client(cluster) as client:
             yield client
 
