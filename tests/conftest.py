@@ -43,3 +43,28 @@ def backend(request) -> BackendCase:
             pytest.skip("numba.cuda is not usable here (neither a GPU nor the simulator)")
         return BackendCase("gpu", small=os.environ.get("NUMBA_ENABLE_CUDASIM") == "1")
     return BackendCase("cpu", small=False)
+
+
+# `slipchain` (the command line) that stops itself with SIGSTOP right after writing its first
+# checkpoint, so that a test can send it a signal at that point whatever the machine's speed
+# (issue 30: polling for the checkpoint file raced the end of the run).
+_STOP_AFTER_FIRST_CHECKPOINT = (
+    "import os, signal\n"
+    "from slipchain.engine import checkpoint as c\n"
+    "save = c.Checkpointer.save\n"
+    "def stop_after(self):\n"
+    "    save(self)\n"
+    "    if self.writes == 1:\n"
+    "        os.kill(os.getpid(), signal.SIGSTOP)\n"
+    "c.Checkpointer.save = stop_after\n"
+    "from slipchain.cli import app\n"
+    "app(prog_name='slipchain')\n")
+
+
+@pytest.fixture
+def cli_stopping_at_first_checkpoint() -> list[str]:
+    """The command prefix of a ``slipchain`` that stops itself after its first checkpoint (wait for it
+    with ``os.waitpid(pid, os.WUNTRACED)``)."""
+    import sys
+
+    return [sys.executable, "-c", _STOP_AFTER_FIRST_CHECKPOINT]

@@ -10,7 +10,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -127,28 +126,13 @@ def _cli(*args, **kw):
                             stderr=subprocess.PIPE, text=True, **kw)
 
 
-# `slipchain run` that stops itself (SIGSTOP) right after writing its first checkpoint, so that a test
-# can kill it there whatever the machine's speed (issue 30: polling for the file raced the run's end)
-_STOP_AFTER_FIRST_CHECKPOINT = (
-    "import os, signal\n"
-    "from slipchain.engine import checkpoint as c\n"
-    "save = c.Checkpointer.save\n"
-    "def stop_after(self):\n"
-    "    save(self)\n"
-    "    if self.writes == 1:\n"
-    "        os.kill(os.getpid(), signal.SIGSTOP)\n"
-    "c.Checkpointer.save = stop_after\n"
-    "from slipchain.cli import app\n"
-    "app(prog_name='slipchain')\n")
-
-
-def test_cli_run_killed_with_sigkill_resumes_bit_for_bit(tmp_path):
+def test_cli_run_killed_with_sigkill_resumes_bit_for_bit(tmp_path, cli_stopping_at_first_checkpoint):
     """The issue's test: ``slipchain run --checkpoint`` SIGKILLed, the same command again: the
     result equals an uninterrupted run. The kill lands after the first checkpoint (the run stops
     itself there and waits), which the resume must continue bit for bit."""
     args = ["run", "--set", "N=41", "--set", "theta=0.6", "--set", "t_total=0.02", "--set", "seed=7", "--json"]
     ckp, out, full = tmp_path / "run.ckpt", tmp_path / "resumed.nc", tmp_path / "full.nc"
-    proc = subprocess.Popen([sys.executable, "-c", _STOP_AFTER_FIRST_CHECKPOINT, *args, "--checkpoint", str(ckp),
+    proc = subprocess.Popen([*cli_stopping_at_first_checkpoint, *args, "--checkpoint", str(ckp),
                              "--checkpoint-every", "0", "--out", str(out)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     _, status = os.waitpid(proc.pid, os.WUNTRACED)  # returns once it has stopped itself (or ended)

@@ -5,30 +5,15 @@ the resume, and the exit code is 143. (The sweep's case: tests/workflows/test_ru
 import os
 import signal
 import subprocess
-import sys
 
 from slipchain.results.io import read_dataset
 
 
-# `slipchain run` that stops itself (SIGSTOP) right after its first checkpoint: the signal lands there
-_STOP_AFTER_FIRST_CHECKPOINT = (
-    "import os, signal\n"
-    "from slipchain.engine import checkpoint as c\n"
-    "save = c.Checkpointer.save\n"
-    "def stop_after(self):\n"
-    "    save(self)\n"
-    "    if self.writes == 1:\n"
-    "        os.kill(os.getpid(), signal.SIGSTOP)\n"
-    "c.Checkpointer.save = stop_after\n"
-    "from slipchain.cli import app\n"
-    "app(prog_name='slipchain')\n")
-
-
-def test_sigterm_stops_a_run_with_its_checkpoint_and_exit_143(tmp_path):
+def test_sigterm_stops_a_run_with_its_checkpoint_and_exit_143(tmp_path, cli_stopping_at_first_checkpoint):
     ckpt, out = tmp_path / "run.ckpt.nc", tmp_path / "run.nc"
     args = ["run", "--set", "N=31", "--set", "t_total=0.1", "--set", 'start="steady"', "--checkpoint", str(ckpt),
             "--checkpoint-every", "0", "--out", str(out)]
-    proc = subprocess.Popen([sys.executable, "-c", _STOP_AFTER_FIRST_CHECKPOINT, *args], stdout=subprocess.PIPE,
+    proc = subprocess.Popen([*cli_stopping_at_first_checkpoint, *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     try:
         _, status = os.waitpid(proc.pid, os.WUNTRACED)  # stopped after its first chunk and checkpoint
