@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 from typing import Annotated, NoReturn, Optional
 
 import typer
@@ -11,6 +12,7 @@ from rich.console import Console
 from ..engine import interrupts
 from ..engine.backends import BackendName
 from ..results.schema import Status
+from ..sweeps.catalogue import find_study, missing_message
 from ..sweeps.executor import SweepReport
 
 err = Console(stderr=True)
@@ -26,6 +28,15 @@ def fail(message: str, code: int = 2) -> NoReturn:
     """The message on stderr as one ``error:`` line, then exit ``code`` (2: rejected input)."""
     err.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
     raise typer.Exit(code)
+
+
+def study_path(given: Path, what: str) -> Path:
+    """A file as given, else the shipped preset of that name (:func:`~slipchain.sweeps.catalogue.find_study`);
+    exit 2 naming ``what`` and the shipped names if neither."""
+    found = find_study(given)
+    if found is None:
+        fail(missing_message(what, given))
+    return found
 
 
 def show_warnings() -> None:

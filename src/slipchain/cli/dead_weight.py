@@ -9,8 +9,7 @@ import typer
 from rich.table import Table
 
 from ..model.config import ConfigError
-from ..sweeps.catalogue import find_study, missing_message
-from .common import BackendName, BackendOpt, WorkersOpt, fail, out, wrote
+from .common import BackendName, BackendOpt, WorkersOpt, fail, out, study_path, wrote
 
 
 def mu_max(
@@ -31,10 +30,7 @@ def mu_max(
     from ..workflows.dead_weight import BracketError, load_plan, run_plan
 
     if plan is not None:
-        found = find_study(plan)
-        if found is None:
-            fail(missing_message("mu-max plan", plan))
-        plan = found
+        plan = study_path(plan, "mu-max plan")
     try:
         the_plan = load_plan(plan, set_, theta=theta or None, seeds=seeds, lo=lo, hi=hi, tol=tol)
         if dry_run:

@@ -12,10 +12,10 @@ from rich.table import Table
 
 from ..engine.backends import BackendName
 from ..results.schema import Status
-from ..sweeps.catalogue import CATALOGUE, find_study, missing_message, preset_files
-from ..sweeps.definition import Preset, SweepError, load_sweep_definition
+from ..sweeps.catalogue import CATALOGUE, preset_files
+from ..sweeps.definition import PRESETS, Preset, SweepError, load_sweep_definition
 from ..sweeps.executor import SWEEP_CHECKPOINT_EVERY, StoreWriteError, SweepReport, run_sweep
-from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, sweep_exit
+from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, study_path, sweep_exit
 
 
 def sweep(
@@ -34,7 +34,7 @@ def sweep(
                                           "and stop: nothing is computed or written.")] = False,
 ) -> None:
     """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
-    definition = _study(definition)
+    definition = study_path(definition, "sweep file")
     if dry_run:
         _dry_run(definition, store)
         return
@@ -49,14 +49,6 @@ def sweep(
     raise typer.Exit(sweep_exit(report))
 
 
-def _study(given: Path) -> Path:
-    """A sweep file as given, else the shipped preset of that name (exit 2 if neither)."""
-    found = find_study(given)
-    if found is None:
-        fail(missing_message("sweep file", given))
-    return found
-
-
 def presets() -> None:
     """List the shipped presets by name: what each is for, its runs and its wall time on 2 cores."""
     files = preset_files()
@@ -66,7 +58,7 @@ def presets() -> None:
     for name in sorted(files, key=lambda n: (CATALOGUE[n].kind != "study", CATALOGUE[n].kind, n)):
         s = CATALOGUE[name]
         short = name.removeprefix("fig6-")
-        alias = f" (reproduce --preset {short})" if short in {p.value for p in Preset} else ""
+        alias = f" (reproduce --preset {short})" if short in PRESETS else ""
         table.add_row(name + alias, "validation campaign" if s.kind == "validation" else s.kind, str(s.runs),
                       s.wall_2_cores, s.purpose)
     out.print(table)

@@ -456,8 +456,9 @@ class Config(BaseModel):
     def to_toml(self) -> str:
         """The config as flat TOML (None values omitted), readable by :func:`load_config`."""
         lines = []
-        for key, value in self.model_dump().items():
-            absent = (_default_t_max_cycles(self.model_dump()) if key == "t_max_cycles"
+        data = self.model_dump()
+        for key, value in data.items():
+            absent = (_default_t_max_cycles(data) if key == "t_max_cycles"
                       else Config.model_fields[key].default)  # what the key's absence means today
             if value is None or (OFF.get(key, _NOT_OFF) == value and absent == value):
                 continue

@@ -40,11 +40,11 @@ import json
 from dataclasses import dataclass
 from enum import StrEnum
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
 from ..model.config import OFF, Config, ConfigError, make_config, read_toml
+from .catalogue import preset_files
 
 
 class SweepError(ValueError):
@@ -252,7 +252,7 @@ def preset_path(name: str | Preset) -> Path:
     """Path of a shipped Fig. 6 preset (``quick``, ``paper``, ``fold``, ``eps1``, ``eps1-check``, ``eps01``, ``adaptive``)."""
     if name not in PRESETS:
         raise SweepError(f"preset {name!r} is unknown; expected one of {', '.join(PRESETS)}")
-    return Path(str(resources.files("slipchain") / "presets" / f"fig6-{Preset(name).value}.toml"))
+    return preset_files()[f"fig6-{Preset(name).value}"]
 
 
 def load_preset(name: str | Preset) -> SweepDefinition:
