@@ -68,3 +68,29 @@ def cli_stopping_at_first_checkpoint() -> list[str]:
     import sys
 
     return [sys.executable, "-c", _STOP_AFTER_FIRST_CHECKPOINT]
+
+
+# `slipchain` (the command line) that stops itself with SIGSTOP right after storing its k-th member
+# (of a sweep, or of a mu-max bisection's rounds): a signal sent then lands there on any machine.
+_STOP_AFTER_MEMBERS = (
+    "import os, signal, sys\n"
+    "from slipchain.sweeps.store import Store\n"
+    "k, write, done = int(sys.argv.pop(1)), Store.write_member, []\n"
+    "def stop_after(self, member, ds):\n"
+    "    path = write(self, member, ds)\n"
+    "    done.append(member.id)\n"
+    "    if len(done) == k:\n"
+    "        os.kill(os.getpid(), signal.SIGSTOP)\n"
+    "    return path\n"
+    "Store.write_member = stop_after\n"
+    "from slipchain.cli import app\n"
+    "app(prog_name='slipchain')\n")
+
+
+@pytest.fixture
+def cli_stopping_after_members():
+    """``k -> command prefix`` of a ``slipchain`` that stops itself (SIGSTOP) once it has stored k
+    members; append the command's arguments, and wait with ``os.waitpid(pid, os.WUNTRACED)``."""
+    import sys
+
+    return lambda k: [sys.executable, "-c", _STOP_AFTER_MEMBERS, str(k)]

@@ -44,33 +44,76 @@ def test_a_bad_bracket_is_a_clear_error():
         mu_max(cfg, lo=1.0, hi=0.5)
 
 
-def test_many_bisections_on_dask_equal_serial_ones_and_resume_from_their_cache(tmp_path):
+def test_many_bisections_on_dask_equal_serial_ones_and_resume_from_their_stores(tmp_path):
+    """Each round of the bisections is a sweep in a store (issue 30): the same numbers as serial
+    bisections in-process, resumed from the stores, damaged files quarantined and rerun, a second
+    driver refused, and the JSON cache of 0.2.0 still read."""
+    import json
+    from dataclasses import asdict
+
     from distributed import Client, LocalCluster
 
+    from slipchain.sweeps.definition import SweepError, member_id
+    from slipchain.sweeps.store import driver_lock
     from slipchain.workflows.dead_weight import mu_max_many
 
     configs = [make_config(**IDENTICAL), make_config(**{**IDENTICAL, "theta": 0.5, "seed": 1})]
     serial = [mu_max(c, lo=0.5, hi=1.5) for c in configs]
-    cache = tmp_path / "cache"
+    out = tmp_path / "out"
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=":0") as cluster, Client(cluster) as client:
-        many = mu_max_many(configs, lo=0.5, hi=1.5, cache=cache, client=client)
+        many = mu_max_many(configs, lo=0.5, hi=1.5, store=out, client=client, progress=False)
     for a, b in zip(serial, many):  # the same runs on workers: the same numbers, bit for bit
         assert (a.status, a.mu_max, a.lo, a.hi, a.v_max) == (b.status, b.mu_max, b.lo, b.hi, b.v_max)
-        assert [(e.mu_a, e.velocity_status) for e in a.evaluations] == [(e.mu_a, e.velocity_status) for e in b.evaluations]
-    files = sorted(cache.glob("*.json"))
-    assert len(files) == sum(len(r.evaluations) for r in many)
-    # Resumed with every evaluation cached: nothing is computed (a client that cannot compute is not asked)...
-    again = mu_max_many(configs, lo=0.5, hi=1.5, cache=cache, client=object())
+        assert [(e.mu_a, e.velocity_status, repr(e.velocity)) for e in a.evaluations] == \
+            [(e.mu_a, e.velocity_status, repr(e.velocity)) for e in b.evaluations]  # repr: NaN equals NaN
+    # one store per round (the lo/hi ends, then one per bisection step), each member one run, named by its id
+    stores = sorted(p.parent for p in (out / "rounds").glob("*/sweep.toml"))
+    assert len(stores) == 1 + max(len(r.evaluations) for r in many) - 2
+    files = sorted((out / "rounds").glob("*/members/*.nc"))
+    ids = {member_id(c.with_updates(dead_weight=e.mu_a)) for c, r in zip(configs, many) for e in r.evaluations}
+    assert {f.stem for f in files} == ids and len(files) == sum(len(r.evaluations) for r in many)
+    # Resumed with every run stored: nothing is computed (a client that cannot compute is not asked)...
+    again = mu_max_many(configs, lo=0.5, hi=1.5, store=out, client=object(), progress=False)
     assert [(r.mu_max, r.lo, r.hi) for r in again] == [(r.mu_max, r.lo, r.hi) for r in many]
-    # ...and after a kill that cut one file and lost another, those runs are redone: the same results, the cache whole.
-    files[0].write_text('{"mu_a": 0.5, "veloc')
+    # ...a second driver on the same output is refused, naming the first, and computes nothing...
+    with driver_lock(out, "mu-max output"):
+        with pytest.raises(SweepError, match="another slipchain driver"):
+            mu_max_many(configs, lo=0.5, hi=1.5, store=out, client=object(), progress=False)
+    # ...and after a kill that cut one member file (as a full disk would) and lost another, those
+    # runs are redone: the cut file quarantined with its reason, the same results, every run stored.
+    files[0].write_bytes(files[0].read_bytes()[:300])
     files[1].unlink()
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=":0") as cluster, Client(cluster) as client:
-        resumed = mu_max_many(configs, lo=0.5, hi=1.5, cache=cache, client=client)
-    assert [(r.mu_max, r.lo, r.hi) for r in resumed] == [(r.mu_max, r.lo, r.hi) for r in many]
-    assert sorted(cache.glob("*.json")) == files
+        resumed = mu_max_many(configs, lo=0.5, hi=1.5, store=out, client=client, progress=False)
+    assert [(r.mu_max, r.lo, r.hi, r.v_max) for r in resumed] == [(r.mu_max, r.lo, r.hi, r.v_max) for r in many]
+    assert sorted((out / "rounds").glob("*/members/*.nc")) == files
+    assert [p.name for p in (out / "rounds").glob("*/quarantine/*.reason.txt")] == [f"{files[0].stem}.reason.txt"]
+    # The JSON cache that 0.2.0 wrote (OUT/cache/<member id>.json) is read: nothing is run again.
+    old = tmp_path / "old"
+    (old / "cache").mkdir(parents=True)
+    for c, r in zip(configs, many):
+        for e in r.evaluations:
+            (old / "cache" / f"{member_id(c.with_updates(dead_weight=e.mu_a))}.json").write_text(json.dumps(asdict(e)))
+    legacy = mu_max_many(configs, lo=0.5, hi=1.5, store=old, client=object(), progress=False)
+    assert [(r.mu_max, r.lo, r.hi, r.v_max) for r in legacy] == [(r.mu_max, r.lo, r.hi, r.v_max) for r in many]
+    assert not list((old / "rounds").glob("*/members/*.nc"))
+
+
+def test_a_round_is_a_sweep_whose_members_are_its_runs():
+    import tomllib
+
+    from slipchain.sweeps.definition import make_sweep, member_id
+    from slipchain.workflows.dead_weight import round_sweep
+
+    base = make_config(**IDENTICAL)
+    runs = [base.with_updates(dead_weight=0.5), base.with_updates(theta=0.5, seed=3, dead_weight=1.0),
+            base.with_updates(N=13, dead_weight=1.5)]
+    sweep = round_sweep(runs)
+    assert [m.config for m in sweep.members] == runs and [m.id for m in sweep.members] == [member_id(c) for c in runs]
+    assert sweep.dims == ("theta", "seed", "dead_weight", "N")  # N differs in one run: swept too
+    assert make_sweep(tomllib.loads(sweep.to_toml())).digest == sweep.digest  # the store's sweep.toml reads back
 
 
 def test_cli_mu_max_writes_the_table_and_refuses_bad_input_with_exit_2(tmp_path):
@@ -185,7 +228,7 @@ def test_t_decide_and_t_ramp_absent_leave_member_ids_unchanged():
 
 def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_path):
     """A plan file ([base] + [bisection] with curve points) through `slipchain mu-max`, resumed from
-    its cache, then `slipchain figure mu-max` (a real figure and report) and a bad plan key."""
+    its stores, then `slipchain figure mu-max` (a real figure and report) and a bad plan key."""
     import subprocess
     import sys
 
@@ -201,8 +244,8 @@ def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_pa
     table, evals = pd.read_csv(out / "mu_max.csv"), pd.read_csv(out / "evaluations.csv")
     f_max = single_contact_maximum(make_config(**IDENTICAL))[0]
     assert (table["status"] == "ok").all() and (abs(table["mu_max"] - f_max) <= TOL).all()
-    # every bisection run and the curve point, each a cache file; the curve point on the analytic branch
-    assert len(list((out / "cache").glob("*.json"))) == len(evals) == table["runs"].sum() + 1
+    # every bisection run and the curve point, each a member of a round's store; the curve point on the analytic branch
+    assert len(list((out / "rounds").glob("*/members/*.nc"))) == len(evals) == table["runs"].sum() + 1
     curve = evals[evals["source"] == "curve"].iloc[0]
     cfg = make_config(**AUTO, dead_weight=0.3)
     assert curve["velocity_status"] == "ok"
@@ -247,3 +290,38 @@ def test_a_refuted_bracket_marks_that_realisation_and_the_others_go_on():
     assert got[1].status == "ok" and abs(got[1].mu_max - single_contact_maximum(configs[1])[0]) <= TOL
     with pytest.raises(BracketError, match="lo = 0.5 must give steady sliding"):
         _bisect(configs, 0.5, 1.5, TOL, lambda jobs: [evaluate(c, m) for c, m in jobs])
+
+
+def test_cli_mu_max_stopped_by_sigterm_keeps_its_runs_and_resumes_to_the_same_tables(tmp_path, cli_stopping_after_members):
+    """SIGTERM (a batch scheduler's time limit) while a round runs, sent when the driver has stored
+    its 3rd run (it stops itself there, so on any machine): exit 143 with one error line, no
+    table, the runs kept; the same command then finishes, equal to an uninterrupted call."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    args = ["mu-max", "--set", "N=11", "--set", "delta=0", "--set", "start=steady", "--set", "t_total=5e-3",
+            "--theta", "1", "--seeds", "2", "--lo", "0.5", "--workers", "1", "--no-progress"]
+    out, whole = tmp_path / "out", tmp_path / "whole"
+    proc = subprocess.Popen([*cli_stopping_after_members(3), *args, "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        _, status = os.waitpid(proc.pid, os.WUNTRACED)
+        assert os.WIFSTOPPED(status), proc.communicate()
+        os.kill(proc.pid, signal.SIGTERM)
+        os.kill(proc.pid, signal.SIGCONT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)  # the orphaned local-cluster processes
+        except ProcessLookupError:
+            pass
+    assert proc.returncode == 143 and err.startswith("error: interrupted") and "rounds" in err, err
+    assert len(list((out / "rounds").glob("*/members/*.nc"))) == 3 and not (out / "mu_max.csv").exists()
+    for folder in (out, whole):
+        r = subprocess.run([sys.executable, "-m", "slipchain", *args, "--out", str(folder)], capture_output=True,
+                           text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+    for name in ("mu_max.csv", "evaluations.csv"):
+        assert (out / name).read_text() == (whole / name).read_text()

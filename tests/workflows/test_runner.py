@@ -165,25 +165,11 @@ def test_worker_killed_mid_task_is_retried(tmp_path, client):
 
 # The sweep driver stops itself (SIGSTOP) right after storing its k-th member, so that a test acts
 # on it at a known point whatever the machine's speed (issue 30: these tests slept and polled).
-_STOP_AFTER_MEMBERS = (
-    "import os, signal, sys\n"
-    "from slipchain.sweeps.store import Store\n"
-    "k, write, done = int(sys.argv.pop(1)), Store.write_member, []\n"
-    "def stop_after(self, member, ds):\n"
-    "    path = write(self, member, ds)\n"
-    "    done.append(member.id)\n"
-    "    if len(done) == k:\n"
-    "        os.kill(os.getpid(), signal.SIGSTOP)\n"
-    "    return path\n"
-    "Store.write_member = stop_after\n"
-    "from slipchain.cli import app\n"
-    "app(prog_name='slipchain')\n")
-
-
-def _slow_sweep(tmp_path, members, stop_after=None):
+def _slow_sweep(tmp_path, members, stop_after=None, stopping=None):
     """The command of a `slipchain sweep` of ``members`` one-second members on a 2-process local
     cluster, its store, and the driver started in a new session (so its cluster can be killed);
-    with ``stop_after`` = k the driver stops itself once it has stored k members."""
+    with ``stop_after`` = k the driver stops itself once it has stored k members (``stopping``: the
+    ``cli_stopping_after_members`` fixture)."""
     definition = tmp_path / "sweep.toml"
     definition.write_text(
         'name = "slow"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\nintegrator = "fixed"\n'
@@ -191,7 +177,7 @@ def _slow_sweep(tmp_path, members, stop_after=None):
     store = tmp_path / "s"
     args = ["sweep", str(definition), "--store", str(store), "--workers", "2", "--no-progress"]
     cmd = [sys.executable, "-m", "slipchain", *args]
-    start = cmd if stop_after is None else [sys.executable, "-c", _STOP_AFTER_MEMBERS, str(stop_after), *args]
+    start = cmd if stop_after is None else [*stopping(stop_after), *args]
     return cmd, store, subprocess.Popen(start, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                         start_new_session=True)
 
@@ -202,11 +188,11 @@ def _wait_stopped(proc) -> None:
     assert os.WIFSTOPPED(status), proc.communicate()
 
 
-def _interrupt_sweep(tmp_path, sig, after_members):
+def _interrupt_sweep(tmp_path, sig, after_members, stopping):
     """Start `slipchain sweep` of 8 one-second members, send ``sig`` to the driver right after it has
     stored ``after_members`` (it stops itself there), let it go on, then kill what is left of its
     process group. Returns (command, store, return code, stdout)."""
-    cmd, store, proc = _slow_sweep(tmp_path, 8, stop_after=after_members)
+    cmd, store, proc = _slow_sweep(tmp_path, 8, stop_after=after_members, stopping=stopping)
     try:
         _wait_stopped(proc)
         os.kill(proc.pid, sig)
@@ -221,8 +207,8 @@ def _interrupt_sweep(tmp_path, sig, after_members):
     return cmd, store, proc.returncode, out
 
 
-def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path):
-    cmd, store, code, _ = _interrupt_sweep(tmp_path, signal.SIGKILL, 2)
+def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path, cli_stopping_after_members):
+    cmd, store, code, _ = _interrupt_sweep(tmp_path, signal.SIGKILL, 2, cli_stopping_after_members)
     members = store / "members"
     assert code == -signal.SIGKILL
     survivors = sorted(p.stem for p in members.glob("*.nc"))
@@ -259,8 +245,8 @@ def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_pa
     assert len(list(Path(tmp_path / "s" / "members").glob("*.nc"))) == 2  # nothing mixed in
 
 
-def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
-    _, store, code, out = _interrupt_sweep(tmp_path, signal.SIGINT, 1)
+def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path, cli_stopping_after_members):
+    _, store, code, out = _interrupt_sweep(tmp_path, signal.SIGINT, 1, cli_stopping_after_members)
     members = store / "members"
     assert code == 130, out
     assert "(interrupted)" in out
@@ -269,10 +255,10 @@ def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path):
     assert Store.open(store).invocations()[-1]["interrupted"] is True
 
 
-def test_sigterm_is_handled_as_ctrl_c_and_exits_143(tmp_path):
+def test_sigterm_is_handled_as_ctrl_c_and_exits_143(tmp_path, cli_stopping_after_members):
     """Issue 30: a batch scheduler's SIGTERM at the wall-time limit (it ended the sweep silently,
     exit 143 from the default action, without the store's index or log): now as Ctrl-C, with 143."""
-    cmd, store, code, out = _interrupt_sweep(tmp_path, signal.SIGTERM, 1)
+    cmd, store, code, out = _interrupt_sweep(tmp_path, signal.SIGTERM, 1, cli_stopping_after_members)
     assert code == 143, out
     assert "(interrupted)" in out
     done = list((store / "members").glob("*.nc"))
@@ -309,6 +295,7 @@ class _SwallowingFinalizer:
             pass
 
 
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # the swallowed Ctrl-C is the point
 def test_ctrl_c_swallowed_in_a_finalizer_still_stops_the_sweep(tmp_path, client, monkeypatch):
     # Deterministic version of the Ctrl-C that CI once missed: the interrupt lands in a finalizer
     # while the first member is stored. Before the SIGINT flag, the sweep ran to the end (exit 0).
@@ -330,9 +317,9 @@ def test_ctrl_c_swallowed_in_a_finalizer_still_stops_the_sweep(tmp_path, client,
     assert Store.open(tmp_path / "s").invocations()[-1]["interrupted"] is True
 
 
-def test_a_second_driver_on_the_same_store_is_refused_naming_the_holder(tmp_path):
+def test_a_second_driver_on_the_same_store_is_refused_naming_the_holder(tmp_path, cli_stopping_after_members):
     # Before the driver lock, both drivers ran every member (and invocations.jsonl claimed both).
-    cmd, store, first = _slow_sweep(tmp_path, 6, stop_after=1)
+    cmd, store, first = _slow_sweep(tmp_path, 6, stop_after=1, stopping=cli_stopping_after_members)
     try:
         _wait_stopped(first)  # it holds the lock, has stored one member, and waits
         second = subprocess.run(cmd, capture_output=True, text=True, timeout=120)

@@ -8,12 +8,13 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
+from ..engine import interrupts
 from ..model.config import ConfigError
-from .common import BackendName, BackendOpt, WorkersOpt, fail, out, study_path, wrote
+from .common import BackendName, BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, study_path, wrote
 
 
 def mu_max(
-    out_dir: Annotated[Path, typer.Option("--out", help="Output directory (mu_max.csv, mu_max_summary.csv, evaluations.csv, plan.toml, cache/).")],
+    out_dir: Annotated[Path, typer.Option("--out", help="Output directory (mu_max.csv, mu_max_summary.csv, evaluations.csv, plan.toml; every run in rounds/, one sweep store per round).")],
     plan: Annotated[Optional[Path], typer.Argument(help="A mu-max plan ([base] config and [bisection] settings), the name of a shipped one (mu-max), or a flat base config.")] = None,
     set_: Annotated[list[str], typer.Option("--set", help="Override one base parameter: name=value (repeatable).")] = [],
     theta: Annotated[Optional[list[float]], typer.Option("--theta", help="Load values (repeatable). [default: plan's, else 0.1 and 1]")] = None,
@@ -21,12 +22,16 @@ def mu_max(
     lo: Annotated[Optional[float], typer.Option("--lo", help="Applied mu_a known to give steady sliding. [default: plan's, else 0.3]")] = None,
     hi: Annotated[Optional[float], typer.Option("--hi", help="Applied mu_a known to run away. [default: plan's, else 1.5]")] = None,
     tol: Annotated[Optional[float], typer.Option("--tol", help="Resolution of mu_max. [default: plan's, else 0.005]")] = None,
+    scheduler: SchedulerOpt = None,
     workers: WorkersOpt = None,
+    progress: ProgressOpt = None,
     backend: BackendOpt = BackendName.CPU,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the plan, say what it would bisect, and stop: "
                                           "nothing is run or written.")] = False,
 ) -> None:
-    """mu_max(theta) under a dead weight by bisection over mu_a, on a local Dask cluster; resumable (OUT/cache)."""
+    """mu_max(theta) under a dead weight by bisection over mu_a, each round a sweep on Dask; resumable (OUT/rounds)."""
+    from ..sweeps.definition import SweepError
+    from ..sweeps.executor import StoreWriteError
     from ..workflows.dead_weight import BracketError, load_plan, run_plan
 
     if plan is not None:
@@ -39,11 +44,16 @@ def mu_max(
                       + (f", curve points {list(the_plan.curve)}" if the_plan.curve else "")
                       + f"; results would go to {out_dir}. Nothing run or written (--dry-run).")
             return
-        result = run_plan(the_plan, out_dir, n_workers=workers, backend=backend)
+        result = run_plan(the_plan, out_dir, scheduler=scheduler, n_workers=workers, backend=backend, progress=progress)
     except ConfigError as e:  # rejected before anything ran: nothing written
         fail(str(e))
-    except BracketError as e:  # found by running: the runs are kept in OUT/cache for the next call
+    except (BracketError, StoreWriteError) as e:  # found by running: the finished runs are kept in OUT/rounds
         fail(str(e), code=1)
+    except SweepError as e:  # another driver runs OUT, or OUT holds another sweep
+        fail(str(e))
+    except KeyboardInterrupt:
+        fail(f"interrupted; every finished run is kept in {out_dir / 'rounds'}: run the same command again to resume",
+             code=interrupts.exit_code())
     wrote([out_dir / f for f in ("mu_max.csv", "mu_max_summary.csv", "evaluations.csv", "plan.toml")])
     t = Table(title="slipchain mu-max (seed means)")
     for col in ("theta", "mu_max", "ratio to theta_min", "seeds", "v_max (m/s)"):

@@ -35,7 +35,7 @@ import json
 import os
 import socket
 import time
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -103,38 +103,9 @@ class Store:
         return cls(path, sweep)
 
     # --- one driver at a time -----------------------------------------------------------------
-    @contextmanager
-    def driver_lock(self) -> Iterator[str | None]:
-        """Hold the store's driver lock while a sweep runs; yields a note if it was taken over.
-
-        The lock is an OS file lock (``filelock``): the operating system releases it when its
-        process ends, however it ends, so a SIGKILLed driver never blocks the store. Its record in
-        driver.json (host, pid, start) is removed on a clean exit; finding one on acquiring means
-        the last driver was killed, and the yielded note says so. While another driver holds the
-        lock, SweepError names the store and the holder (two drivers would compute every member
-        twice). Note: file locks on network file systems depend on their lock support.
-        """
-        lock = FileLock(self.path / LOCK)
-        record = self.path / HOLDER
-        try:
-            lock.acquire(timeout=0)
-        except Timeout:
-            raise SweepError(f"store {str(self.path)!r} is being run by another slipchain driver "
-                             f"({_holder_text(record)}); two drivers would compute every member twice. Wait for it "
-                             "to finish or stop it (Ctrl-C), then run this command again.") from None
-        try:
-            note = None
-            if record.exists():
-                note = (f"took over the driver lock of store {str(self.path)!r}: its last driver "
-                        f"({_holder_text(record)}) ended without releasing it (killed); its finished members are kept")
-            write_text_atomic(record, json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
-                                                  "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}) + "\n")
-            try:
-                yield note
-            finally:
-                record.unlink(missing_ok=True)
-        finally:
-            lock.release()
+    def driver_lock(self) -> "AbstractContextManager[str | None]":
+        """Hold the store's driver lock while a sweep runs (:func:`driver_lock`)."""
+        return driver_lock(self.path, "store")
 
     # --- members -------------------------------------------------------------------------
     def member_path(self, mid: str) -> Path:
@@ -343,6 +314,42 @@ def _header(path: Path) -> dict[str, Any]:
         return read_attrs(path)
     except Exception as e:  # h5py raises OSError, but also ValueError/KeyError/RuntimeError on odd bytes
         raise UnreadableMember(f"{path.name}: {type(e).__name__}: {e}") from e
+
+
+@contextmanager
+def driver_lock(folder: str | os.PathLike, what: str = "store") -> Iterator[str | None]:
+    """Hold the driver lock of ``folder`` (a sweep store, or a mu-max output directory holding
+    many) while its runs go on; yields a note if it was taken over.
+
+    The lock is an OS file lock (``filelock``): the operating system releases it when its
+    process ends, however it ends, so a SIGKILLed driver never blocks the folder. Its record in
+    driver.json (host, pid, start) is removed on a clean exit; finding one on acquiring means
+    the last driver was killed, and the yielded note says so. While another driver holds the
+    lock, SweepError names the folder and the holder (two drivers would compute every member
+    twice). Note: file locks on network file systems depend on their lock support.
+    """
+    folder = Path(folder)
+    lock = FileLock(folder / LOCK)
+    record = folder / HOLDER
+    try:
+        lock.acquire(timeout=0)
+    except Timeout:
+        raise SweepError(f"{what} {str(folder)!r} is being run by another slipchain driver "
+                         f"({_holder_text(record)}); two drivers would compute every member twice. Wait for it "
+                         "to finish or stop it (Ctrl-C), then run this command again.") from None
+    try:
+        note = None
+        if record.exists():
+            note = (f"took over the driver lock of {what} {str(folder)!r}: its last driver "
+                    f"({_holder_text(record)}) ended without releasing it (killed); its finished members are kept")
+        write_text_atomic(record, json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
+                                              "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}) + "\n")
+        try:
+            yield note
+        finally:
+            record.unlink(missing_ok=True)
+    finally:
+        lock.release()
 
 
 def _holder_text(record: Path) -> str:

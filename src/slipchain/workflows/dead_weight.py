@@ -19,10 +19,11 @@ so the bisection from [0.5, 1.5] gives 0.996 (bracket 0.992-1.000), 0.004 below 
 the issue's resolution of 0.005, and biased low (tests/physics/test_mu_max.py).
 
 :func:`mu_max_many` runs the bisections of many realisations (theta, seeds) in lock-step: each
-round evaluates every open bracket's middle at once, as Dask tasks (a real local cluster by
-default), and keeps every evaluation in a cache directory (one small JSON file per dead-weight
-run, named by the run's member id and written atomically), so an interrupted call resumes
-without recomputing what it had finished.
+round evaluates every open bracket's middle at once, as one sweep (:class:`Rounds`): its runs are
+the members of a store in ``OUT/rounds/<digest>``, run on Dask (a real local cluster by default)
+by the same executor as ``slipchain sweep``, so a kill, a second driver, a failed run or a
+corrupt file behaves as it does in any sweep, and an interrupted call resumes without
+recomputing what it had finished (issue 30).
 
 A :class:`Plan` (``[base]`` and ``[bisection]`` of a TOML file, e.g. ``presets/mu-max.toml``)
 says what ``slipchain mu-max`` runs; :func:`run_plan` runs it and writes its tables. Use the
@@ -34,7 +35,8 @@ from __future__ import annotations
 
 import json
 import os
-from contextlib import contextmanager
+import tempfile
+from contextlib import ExitStack
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping
@@ -45,9 +47,10 @@ from ..analysis.statistics import ratios_to_first
 from ..engine.backends import BackendName
 from ..engine.simulate import run
 from ..model.config import Config, ConfigError, make_config
-from ..results.io import write_csv, write_text_atomic
+from ..results.io import write_bytes, write_csv, write_text_atomic
+from ..results.schema import Status
 from ..results.velocity import VelocityStatus
-from ..sweeps.definition import member_id
+from ..sweeps.definition import SweepDefinition, make_sweep, member_id
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -57,7 +60,7 @@ BRACKET = "bracket"  # status of a realisation whose runs at lo or hi did not br
 
 
 class BracketError(ValueError):
-    """The runs at ``lo`` or ``hi`` did not bracket mu_max (found by running them; they are kept in the cache)."""
+    """The runs at ``lo`` or ``hi`` did not bracket mu_max (found by running them; they are kept in OUT/rounds)."""
 
 
 @dataclass
@@ -86,12 +89,7 @@ class MuMax:
 def evaluate(config: Config, mu_a: float, backend: str | BackendName = BackendName.CPU) -> Evaluation:
     """One dead-weight run at applied ``mu_a`` and the tester's classification of its velocity."""
     ds = run(config.with_updates(dead_weight=float(mu_a)), backend=backend, progress=False)
-    a = ds.attrs
-    status = str(a.get("velocity_status", VelocityStatus.NO_STEADY))
-    message = str(a.get("message", ""))
-    if status == VelocityStatus.NO_STEADY and a.get("velocity_reason"):  # say why it is undecided
-        message = "; ".join(m for m in (message, str(a["velocity_reason"])) if m)
-    return Evaluation(float(mu_a), status, float(a.get("velocity", np.nan)), message)
+    return _evaluation(mu_a, ds.attrs)
 
 
 def mu_max(config: Config | Mapping[str, Any], *, lo: float = 0.3, hi: float = 1.5, tol: float = TOL,
@@ -107,46 +105,151 @@ def mu_max(config: Config | Mapping[str, Any], *, lo: float = 0.3, hi: float = 1
 
 
 def mu_max_many(configs: list[Config], *, lo: float = 0.3, hi: float = 1.5, tol: float = TOL,
-                cache: str | os.PathLike | None = None, client: Any = None, n_workers: int | None = None,
-                backend: str | BackendName = BackendName.CPU, strict: bool = True) -> list[MuMax]:
-    """:func:`mu_max` for many realisations at once, each round's runs as Dask tasks; the same
-    results as one :func:`mu_max` per config. ``cache``: a directory keeping every evaluation
-    (resume after an interruption); ``client``: an existing ``distributed.Client``, else a local
-    cluster of ``n_workers`` processes. ``strict=False``: a refuted bracket marks that realisation
-    ``bracket`` instead of raising BracketError."""
+                store: str | os.PathLike | None = None, client: Any = None, scheduler: str | None = None,
+                n_workers: int | None = None, backend: str | BackendName = BackendName.CPU, strict: bool = True,
+                progress: bool | None = None) -> list[MuMax]:
+    """:func:`mu_max` for many realisations at once, each round's runs a sweep of their own in a
+    store (:class:`Rounds`); the same results as one :func:`mu_max` per config.
+
+    ``store``: the output directory that keeps every round (OUT/rounds; a second call resumes),
+    else a temporary one; ``client``: an existing ``distributed.Client``, else ``scheduler`` (an
+    address) or a local cluster of ``n_workers`` processes, started only if something is to run.
+    ``strict=False``: a refuted bracket marks that realisation ``bracket`` instead of raising
+    BracketError. KeyboardInterrupt if interrupted (Ctrl-C, SIGTERM): every finished run is kept."""
     configs = [c if isinstance(c, Config) else make_config(dict(c)) for c in configs]
-    with _client(client, n_workers) as c:
-        return _bisect(configs, lo, hi, tol, lambda jobs: evaluate_many(jobs, cache=cache, client=c, backend=backend),
-                       strict)
+    with Rounds(store, client=client, scheduler=scheduler, n_workers=n_workers, backend=backend,
+                progress=progress) as rounds:
+        return _bisect(configs, lo, hi, tol, rounds.evaluate, strict)
 
 
-def evaluate_many(jobs: list[tuple[Config, float]], *, cache: str | os.PathLike | None = None, client: Any = None,
-                  n_workers: int | None = None, backend: str | BackendName = BackendName.CPU) -> list[Evaluation]:
-    """:func:`evaluate` for many (config, mu_a) pairs as Dask tasks; those in ``cache`` are read, not run,
-    and each new one is written there as soon as it is done."""
-    folder = Path(cache) if cache is not None else None
-    out: list[Evaluation | None] = [_cached(folder, cfg, mu) for cfg, mu in jobs]
-    todo = [i for i, e in enumerate(out) if e is None]
-    if todo:
-        with _client(client, n_workers) as c:
-            futures = c.map(evaluate, [jobs[i][0] for i in todo], [jobs[i][1] for i in todo],
-                            [str(backend)] * len(todo), pure=False)
-            for i, fut in zip(todo, futures):
-                out[i] = fut.result()
-                _store(folder, jobs[i][0], out[i])
-    return out  # type: ignore[return-value]
+def evaluate_many(jobs: list[tuple[Config, float]], *, store: str | os.PathLike | None = None, client: Any = None,
+                  scheduler: str | None = None, n_workers: int | None = None,
+                  backend: str | BackendName = BackendName.CPU, progress: bool | None = None) -> list[Evaluation]:
+    """:func:`evaluate` for many (config, mu_a) pairs, run as one sweep (:meth:`Rounds.evaluate`)."""
+    with Rounds(store, client=client, scheduler=scheduler, n_workers=n_workers, backend=backend,
+                progress=progress) as rounds:
+        return rounds.evaluate(jobs)
 
 
-@contextmanager
-def _client(client: Any, n_workers: int | None):
-    """The given Dask client, else a local cluster for the duration."""
-    if client is not None:
-        yield client
-        return
-    from ..sweeps.executor import dask_client
+ROUNDS = "rounds"  # OUT/rounds/<digest>: one sweep store per round of dead-weight runs
+LEGACY_CACHE = "cache"  # OUT/cache/<member id>.json: the evaluations of slipchain 0.2.0 and before (read, never written)
 
-    with dask_client(None, n_workers) as c:
-        yield c
+
+class Rounds:
+    """The dead-weight runs of a bisection, one round at a time, each round a sweep in a store.
+
+    A round's runs (one per open bracket, or the lo/hi ends, or the curve points) are the members
+    of a sweep over the keys in which they differ (theta, seed, dead_weight, ...), stored in
+    ``OUT/rounds/<digest>`` and run by :func:`slipchain.sweeps.executor.run_sweep`: the same
+    resume, quarantine of unreadable files, failure records, checkpoints of long members,
+    progress bar and scheduler as any ``slipchain sweep``. The rounds follow from the results
+    before them, so a second call meets the same rounds and finds their members done; a kill
+    loses only the runs in flight. ``OUT`` itself carries a driver lock for the whole bisection
+    (a second driver is refused, naming the first).
+
+    An evaluation is read from its member file's attributes (``velocity_status``, ``velocity``,
+    ``message``, ``velocity_reason``); a failed member (``error``, ``diverged``) gives that status,
+    which stops its realisation's bisection with the reason while the others go on (it is rerun by
+    the next call). A run that another round already holds (a plan given more seeds, a curve point
+    that the bisection visited) is copied from there, not rerun; so is nothing else. The JSON files
+    that slipchain 0.2.0 kept in ``OUT/cache`` are still read: a run found there is not run again.
+    """
+
+    def __init__(self, out: str | os.PathLike | None, *, client: Any = None, scheduler: str | None = None,
+                 n_workers: int | None = None, backend: str | BackendName = BackendName.CPU,
+                 progress: bool | None = None):
+        self.out, self.client, self.scheduler, self.n_workers = out, client, scheduler, n_workers
+        self.backend, self.progress = str(backend), progress
+        self._stack = ExitStack()
+
+    def __enter__(self) -> "Rounds":
+        from ..sweeps.store import driver_lock
+
+        if self.out is None:
+            self.out = self._stack.enter_context(tempfile.TemporaryDirectory(prefix="slipchain-mu-max-"))
+        self.out = Path(self.out)
+        (self.out / ROUNDS).mkdir(parents=True, exist_ok=True)
+        self._stack.enter_context(driver_lock(self.out, "mu-max output"))
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._stack.close()
+
+    def _client(self) -> Any:
+        """The Dask client: the given one, else one started now and kept for the later rounds."""
+        if self.client is None:
+            from ..sweeps.executor import GPU_THREADS, dask_client
+
+            gpu = self.backend == BackendName.GPU
+            self.client = self._stack.enter_context(
+                dask_client(self.scheduler, self.n_workers or (1 if gpu else None), GPU_THREADS if gpu else 1))
+        return self.client
+
+    def evaluate(self, jobs: list[tuple[Config, float]]) -> list[Evaluation]:
+        """One round: every (config, mu_a) evaluated, from its store if done, else run."""
+        from ..engine import interrupts
+        from ..sweeps.executor import run_sweep
+        from ..sweeps.store import Store
+
+        interrupts.check()  # a Ctrl-C or SIGTERM between rounds whose KeyboardInterrupt was lost
+        configs = [c.with_updates(dead_weight=float(m)) for c, m in jobs]
+        ids = [member_id(c) for c in configs]
+        found = {i: e for i, c in zip(ids, configs) if (e := self._legacy(i, c.dead_weight)) is not None}
+        todo = list({i: c for i, c in zip(ids, configs) if i not in found}.values())
+        if todo:
+            sweep = round_sweep(todo)
+            st = Store.open(self.out / ROUNDS / sweep.digest, sweep)
+            self._reuse(st)
+            report = run_sweep(sweep, st, client=self._client() if st.pending() else None, scheduler=self.scheduler,
+                               n_workers=self.n_workers, progress=self.progress, backend=self.backend)
+            if report.interrupted:
+                raise KeyboardInterrupt
+            for m in sweep.members:
+                found[m.id] = _evaluation(m.config.dead_weight, st.member_attrs(m))
+        return [found[i] for i in ids]
+
+    def _legacy(self, mid: str, mu_a: float) -> Evaluation | None:
+        """The evaluation that slipchain 0.2.0 cached in OUT/cache/<id>.json, if there is a whole one."""
+        try:
+            e = Evaluation(**json.loads((self.out / LEGACY_CACHE / f"{mid}.json").read_text()))
+        except (OSError, ValueError, TypeError):  # absent, or cut by a kill: run it
+            return None
+        return e if e.mu_a == mu_a else None
+
+    def _reuse(self, st: Any) -> None:
+        """Copy into ``st`` the finished members that another round's store holds (atomically)."""
+        for m in st.pending():
+            for other in sorted((self.out / ROUNDS).glob(f"*/members/{m.id}.nc")):
+                if other.parent.parent != st.path:
+                    write_bytes(st.member_path(m.id), other.read_bytes())
+                    break
+
+
+def round_sweep(configs: list[Config], name: str = "mu-max-round") -> SweepDefinition:
+    """The sweep whose members are exactly ``configs``: the first is the base, and each config is
+    one single-valued grid over the keys in which any of them differs from it (always theta, seed
+    and dead_weight), so its member ids are the configs' own ids."""
+    dumps = [c.model_dump() for c in configs]
+    first = dumps[0]
+    keys = ["theta", "seed", "dead_weight"]
+    keys += sorted({k for d in dumps for k in d if d[k] != first[k] and k not in keys})
+    sweep = make_sweep({"name": name, "base": {k: v for k, v in first.items() if v is not None},
+                        "grid": [{k: [d[k]] for k in keys} for d in dumps]})
+    assert [m.id for m in sweep.members] == [member_id(c) for c in configs]
+    return sweep
+
+
+def _evaluation(mu_a: float, attrs: Mapping[str, Any] | None) -> Evaluation:
+    """An evaluation from a run's attributes (the Dataset of :func:`run`, or a stored member's)."""
+    a = attrs or {"status": "error", "message": "not run"}
+    status = str(a.get("status", Status.ERROR))
+    if status != Status.COMPLETED:  # failed or interrupted: its own status stops the bisection
+        return Evaluation(float(mu_a), status, float("nan"), str(a.get("message", "")))
+    vstatus = str(a.get("velocity_status", VelocityStatus.NO_STEADY))
+    message = str(a.get("message", ""))
+    if vstatus == VelocityStatus.NO_STEADY and a.get("velocity_reason"):  # say why it is undecided
+        message = "; ".join(m for m in (message, str(a["velocity_reason"])) if m)
+    return Evaluation(float(mu_a), vstatus, float(a.get("velocity", np.nan)), message)
 
 
 def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
@@ -193,31 +296,12 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
                   stopped.get(i, "")) for i in range(n)]
 
 
-def _cache_path(folder: Path, cfg: Config, mu_a: float) -> Path:
-    return folder / f"{member_id(cfg.with_updates(dead_weight=float(mu_a)))}.json"
-
-
-def _cached(folder: Path | None, cfg: Config, mu_a: float) -> Evaluation | None:
-    if folder is None:
-        return None
-    path = _cache_path(folder, cfg, mu_a)
-    try:
-        return Evaluation(**json.loads(path.read_text()))
-    except (OSError, ValueError, TypeError):  # absent, or cut by a kill: run it again
-        return None
-
-
-def _store(folder: Path | None, cfg: Config, e: Evaluation) -> None:
-    if folder is not None:
-        write_text_atomic(_cache_path(folder, cfg, e.mu_a), json.dumps(asdict(e)) + "\n")
-
-
 def mu_max_table(base: Config, thetas: list[float], seeds: list[int], *, lo: float = 0.3, hi: float = 1.5,
-                 tol: float = TOL, cache: str | os.PathLike | None = None, client: Any = None,
+                 tol: float = TOL, store: str | os.PathLike | None = None, client: Any = None,
                  n_workers: int | None = None, backend: str | BackendName = BackendName.CPU) -> "pd.DataFrame":
     """mu_max and v_max for every (theta, seed) from ``base`` (:func:`mu_max_many`), one row each."""
     configs = [base.with_updates(theta=float(t), seed=int(s)) for t in thetas for s in seeds]
-    results = mu_max_many(configs, lo=lo, hi=hi, tol=tol, cache=cache, client=client, n_workers=n_workers,
+    results = mu_max_many(configs, lo=lo, hi=hi, tol=tol, store=store, client=client, n_workers=n_workers,
                           backend=backend)
     return _table(configs, results)
 
@@ -360,23 +444,25 @@ class PlanResult:
     evaluations: "pd.DataFrame"  # every dead-weight run: evaluations.csv
 
 
-def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, n_workers: int | None = None,
-             backend: str | BackendName = BackendName.CPU) -> PlanResult:
-    """Run a plan: the bisections (:func:`mu_max_many`) and the ``curve`` points, every run cached in
-    OUT/cache (a second call resumes), then write mu_max.csv, mu_max_summary.csv, evaluations.csv
-    and plan.toml into ``out`` (each file atomically). A realisation whose lo/hi runs refute the
-    bracket has status ``bracket`` (with the reason) and the others go on; BracketError only when
-    every realisation's bracket is refuted (nothing to report)."""
+def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, scheduler: str | None = None,
+             n_workers: int | None = None, backend: str | BackendName = BackendName.CPU,
+             progress: bool | None = None) -> PlanResult:
+    """Run a plan: the bisections (:func:`mu_max_many`) and the ``curve`` points, every run a member
+    of a round's store in OUT/rounds (:class:`Rounds`; a second call resumes), then write mu_max.csv,
+    mu_max_summary.csv, evaluations.csv and plan.toml into ``out`` (each file atomically). A
+    realisation whose lo/hi runs refute the bracket has status ``bracket`` (with the reason) and
+    the others go on; BracketError only when every realisation's bracket is refuted (nothing to
+    report). KeyboardInterrupt if interrupted (the finished runs are kept); SweepError if another
+    driver runs ``out``; StoreWriteError on a full disk."""
     import pandas as pd
-
 
     out = Path(out)
     configs = plan.configs()
-    with _client(client, n_workers) as c:
-        results = mu_max_many(configs, lo=plan.lo, hi=plan.hi, tol=plan.tol, cache=out / "cache", client=c,
-                              backend=backend, strict=False)
+    with Rounds(out, client=client, scheduler=scheduler, n_workers=n_workers, backend=backend,
+                progress=progress) as rounds:
+        results = _bisect(configs, plan.lo, plan.hi, plan.tol, rounds.evaluate, strict=False)
         curve_jobs = [(plan.base.with_updates(theta=float(t), seed=0), float(m)) for t in plan.theta for m in plan.curve]
-        curve = evaluate_many(curve_jobs, cache=out / "cache", client=c, backend=backend)
+        curve = rounds.evaluate(curve_jobs) if curve_jobs else []
     table = _table(configs, results)
     if all(r.status == BRACKET for r in results):
         raise BracketError(results[0].message)
@@ -409,7 +495,8 @@ def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float
     return float(f[i]), float(u[i])
 
 
-__all__ = ["BRACKET", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "evaluate", "evaluate_many",
+__all__ = ["BRACKET", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "Rounds",
+           "evaluate", "evaluate_many", "round_sweep",
            "evaluations_table", "load_plan", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table", "plan_toml",
            "run_plan", "single_contact_maximum"]
 
