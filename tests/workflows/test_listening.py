@@ -56,3 +56,25 @@ def test_the_local_cluster_listens_on_the_loopback_only():
         assert len(addresses) >= 3  # the scheduler, the dashboard, the worker (and its nanny)
         assert all(ipaddress.ip_address(a).is_loopback for a in addresses), addresses
         assert "127.0.0.1" in client.dashboard_link
+
+
+def test_the_dashboard_address_is_printed_on_request_only(tmp_path):
+    """`--dashboard` prints the local cluster's dashboard address (127.0.0.1, a real port) as one line
+    on stderr; without it nothing about the dashboard is printed."""
+    import re
+    import subprocess
+    import sys
+
+    definition = tmp_path / "sweep.toml"
+    definition.write_text('name = "d"\n[base]\nN = 11\nstart = "steady"\nt_total = 0.05\n[grid]\nseed = [0]\n')
+    printed = {}
+    for flag in ("--dashboard", None):
+        r = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(definition), "--store",
+                            str(tmp_path / f"s{flag}"), "--workers", "1", "--no-progress", *([flag] if flag else [])],
+                           capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+        printed[flag] = re.findall(r"^dashboard: http://([0-9.]+):(\d+)/status$", r.stderr, re.M)
+        assert "dashboard" not in r.stdout
+    (host, port), = printed["--dashboard"]
+    assert ipaddress.ip_address(host).is_loopback and int(port) > 0
+    assert printed[None] == []

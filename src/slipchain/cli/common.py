@@ -75,4 +75,14 @@ def status_exit(status: Status) -> int:
 WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="Local cluster size (default: one process per core).")]
 SchedulerOpt = Annotated[Optional[str], typer.Option("--scheduler", help="Address of an existing Dask scheduler, e.g. tcp://host:8786.")]
 BackendOpt = Annotated[BackendName, typer.Option("--backend", help="Where to compute: cpu, gpu (numba.cuda) or auto (the GPU if one is found).")]
+DashboardOpt = Annotated[bool, typer.Option("--dashboard", help="Print the address of the Dask dashboard (on 127.0.0.1 for the local cluster) when the cluster starts.")]
+
+
+def announce_dashboard(wanted: bool):
+    """The ``announce`` callback of ``--dashboard``: one ``dashboard:`` line on stderr, else None."""
+    if not wanted:
+        return None
+    return lambda link: err.print(f"dashboard: {link}", markup=False, highlight=False, soft_wrap=True)
+
+
 ProgressOpt = Annotated[Optional[bool], typer.Option("--progress/--no-progress", help="Progress bar (default: on a terminal).")]

@@ -10,7 +10,8 @@ from rich.table import Table
 
 from ..engine import interrupts
 from ..model.config import ConfigError
-from .common import BackendName, BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, study_path, wrote
+from .common import (BackendName, BackendOpt, DashboardOpt, ProgressOpt, SchedulerOpt, WorkersOpt, announce_dashboard,
+                     fail, out, study_path, wrote)
 
 
 def mu_max(
@@ -25,6 +26,7 @@ def mu_max(
     scheduler: SchedulerOpt = None,
     workers: WorkersOpt = None,
     progress: ProgressOpt = None,
+    dashboard: DashboardOpt = False,
     backend: BackendOpt = BackendName.CPU,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the plan, say what it would bisect, and stop: "
                                           "nothing is run or written.")] = False,
@@ -44,7 +46,8 @@ def mu_max(
                       + (f", curve points {list(the_plan.curve)}" if the_plan.curve else "")
                       + f"; results would go to {out_dir}. Nothing run or written (--dry-run).")
             return
-        result = run_plan(the_plan, out_dir, scheduler=scheduler, n_workers=workers, backend=backend, progress=progress)
+        result = run_plan(the_plan, out_dir, scheduler=scheduler, n_workers=workers, backend=backend, progress=progress,
+                          announce=announce_dashboard(dashboard))
     except ConfigError as e:  # rejected before anything ran: nothing written
         fail(str(e))
     except (BracketError, StoreWriteError) as e:  # found by running: the finished runs are kept in OUT/rounds

@@ -15,7 +15,8 @@ from ..results.schema import Status
 from ..sweeps.catalogue import CATALOGUE, preset_files
 from ..sweeps.definition import PRESETS, Preset, SweepError, load_sweep_definition
 from ..sweeps.executor import SWEEP_CHECKPOINT_EVERY, StoreWriteError, SweepReport, run_sweep
-from .common import BackendOpt, ProgressOpt, SchedulerOpt, WorkersOpt, fail, out, study_path, sweep_exit
+from .common import (BackendOpt, DashboardOpt, ProgressOpt, SchedulerOpt, WorkersOpt, announce_dashboard, fail, out,
+                     study_path, sweep_exit)
 
 
 def sweep(
@@ -25,6 +26,7 @@ def sweep(
     scheduler: SchedulerOpt = None,
     workers: WorkersOpt = None,
     progress: ProgressOpt = None,
+    dashboard: DashboardOpt = False,
     backend: BackendOpt = BackendName.CPU,
     batch_size: Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Members per task, advanced together (default 1; 256 on the GPU).")] = None,
     checkpoint_every: Annotated[float, typer.Option(
@@ -40,7 +42,8 @@ def sweep(
         return
     try:
         report = run_sweep(load_sweep_definition(definition), store, scheduler=scheduler, n_workers=workers,
-                           progress=progress, backend=backend, batch_size=batch_size, checkpoint_every=checkpoint_every)
+                           progress=progress, backend=backend, batch_size=batch_size, checkpoint_every=checkpoint_every,
+                           announce=announce_dashboard(dashboard))
     except StoreWriteError as e:  # found while running (a full disk): what was stored is kept
         fail(str(e), code=1)
     except SweepError as e:
@@ -122,6 +125,7 @@ def reproduce(
     scheduler: SchedulerOpt = None,
     workers: WorkersOpt = None,
     progress: ProgressOpt = None,
+    dashboard: DashboardOpt = False,
     backend: BackendOpt = BackendName.CPU,
 ) -> None:
     """The main job: the Fig. 6 sweep (resumable), Figs. 5 and 6, and report.md with the paper's claims."""
@@ -130,7 +134,7 @@ def reproduce(
     command = " ".join(["slipchain", "reproduce", *sys.argv[2:]]) if len(sys.argv) > 1 else ""
     try:
         result = reproduce_job(preset, store, out_dir, scheduler=scheduler, n_workers=workers, progress=progress,
-                               command=command, backend=backend)
+                               command=command, backend=backend, announce=announce_dashboard(dashboard))
     except StoreWriteError as e:
         fail(str(e), code=1)
     except SweepError as e:

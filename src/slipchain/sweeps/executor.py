@@ -43,7 +43,7 @@ import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
 import xarray as xr
 
@@ -169,12 +169,16 @@ def default_workers() -> int:
 
 @contextmanager
 def dask_client(scheduler: str | None = None, n_workers: int | None = None,
-                threads_per_worker: int = 1) -> Iterator["object"]:
-    """A ``distributed.Client``: to ``scheduler`` if given, else to a new local cluster."""
+                threads_per_worker: int = 1, announce: Callable[[str], None] | None = None) -> Iterator["object"]:
+    """A ``distributed.Client``: to ``scheduler`` if given, else to a new local cluster (every
+    address on 127.0.0.1, the dashboard's too). ``announce``: called with the dashboard's address
+    once the client is up (``--dashboard``)."""
     from distributed import Client, LocalCluster
 
     if scheduler:
         with Client(scheduler) as client:
+            if announce is not None:
+                announce(client.dashboard_link)
             yield client
         return
     # Logs of the local cluster: critical only. A task's failure comes back to the driver and is stored
@@ -183,13 +187,16 @@ def dask_client(scheduler: str | None = None, n_workers: int | None = None,
     with LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=threads_per_worker, processes=True,
                       host="127.0.0.1", dashboard_address="127.0.0.1:0", silence_logs=logging.CRITICAL) as cluster:
         with Client(cluster) as client:
+            if announce is not None:
+                announce(client.dashboard_link)
             yield client
 
 
 def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, scheduler: str | None = None,
               n_workers: int | None = None, client: object | None = None, progress: bool | None = None,
               backend: str | BackendName = BackendName.CPU, batch_size: int | None = None,
-              checkpoint_every: float | None = SWEEP_CHECKPOINT_EVERY) -> SweepReport:
+              checkpoint_every: float | None = SWEEP_CHECKPOINT_EVERY,
+              announce: Callable[[str], None] | None = None) -> SweepReport:
     """Run the members of ``sweep`` that ``store`` does not hold yet; write each as it finishes.
 
     ``client``: an existing ``distributed.Client`` to use (tests); else ``scheduler`` (an
@@ -200,6 +207,7 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     local cluster is one worker process with GPU_THREADS threads: up to that many batches (of
     different N or dt) advance at once, each on its own CUDA stream. ``checkpoint_every``: wall-clock
     seconds between the checkpoints of a running task (None: no checkpoints; see the module docstring).
+    ``announce``: called with the Dask dashboard's address when this call starts a cluster or connects.
     """
     threads = 1
     if backend == "gpu":  # one worker process owns the GPU; its threads run batches on separate streams
@@ -209,12 +217,12 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     st = store if isinstance(store, Store) else Store.open(store, sweep)
     with st.driver_lock() as note:  # SweepError, naming the holder, if another driver runs this store
         return _run_locked(st, note, batch_size, client, scheduler, n_workers, threads, progress, backend,
-                           checkpoint_every)
+                           checkpoint_every, announce)
 
 
 def _run_locked(st: Store, note: str | None, batch_size: int | None, client, scheduler: str | None,
                 n_workers: int | None, threads: int, progress: bool | None, backend: str,
-                checkpoint_every: float | None) -> SweepReport:
+                checkpoint_every: float | None, announce: Callable[[str], None] | None = None) -> SweepReport:
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     quarantined = st.check_members()  # unreadable member files: moved to quarantine/, their members rerun
@@ -227,7 +235,7 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
     try:
         with _interrupt_flag():
             _run_groups(pending, batch_size, client, scheduler, n_workers, threads, st, report, bar, backend,
-                        checkpoint_every)
+                        checkpoint_every, announce)
     except KeyboardInterrupt:
         report.interrupted = True
     finally:
@@ -253,7 +261,7 @@ def _best_effort(write, *args) -> None:
 
 def _run_groups(pending: list[Member], batch_size: int | None, client, scheduler: str | None, n_workers: int | None,
                 threads: int, st: Store, report: SweepReport, bar: "_SweepProgress", backend: str,
-                checkpoint_every: float | None) -> None:
+                checkpoint_every: float | None, announce: Callable[[str], None] | None = None) -> None:
     """Submit the pending members (in batches) to ``client`` or a new cluster and store each result."""
     groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
     st.prune_checkpoints(groups)  # those of earlier batchings or of members stored since
@@ -262,7 +270,7 @@ def _run_groups(pending: list[Member], batch_size: int | None, client, scheduler
     if client is not None:
         _execute(client, st, groups, report, bar, backend, checkpoint_every)
     else:
-        with dask_client(scheduler, n_workers, threads) as c:
+        with dask_client(scheduler, n_workers, threads, announce) as c:
             _check_interrupt()
             _execute(c, st, groups, report, bar, backend, checkpoint_every)
 

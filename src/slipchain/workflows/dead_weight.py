@@ -157,8 +157,9 @@ class Rounds:
 
     def __init__(self, out: str | os.PathLike | None, *, client: Any = None, scheduler: str | None = None,
                  n_workers: int | None = None, backend: str | BackendName = BackendName.CPU,
-                 progress: bool | None = None):
+                 progress: bool | None = None, announce: Callable[[str], None] | None = None):
         self.out, self.client, self.scheduler, self.n_workers = out, client, scheduler, n_workers
+        self.announce = announce  # called with the dashboard's address when a cluster is started
         self.backend, self.progress = str(backend), progress
         self._stack = ExitStack()
 
@@ -182,7 +183,8 @@ class Rounds:
 
             gpu = self.backend == BackendName.GPU
             self.client = self._stack.enter_context(
-                dask_client(self.scheduler, self.n_workers or (1 if gpu else None), GPU_THREADS if gpu else 1))
+                dask_client(self.scheduler, self.n_workers or (1 if gpu else None), GPU_THREADS if gpu else 1,
+                            self.announce))
         return self.client
 
     def evaluate(self, jobs: list[tuple[Config, float]]) -> list[Evaluation]:
@@ -201,7 +203,8 @@ class Rounds:
             st = Store.open(self.out / ROUNDS / sweep.digest, sweep)
             self._reuse(st)
             report = run_sweep(sweep, st, client=self._client() if st.pending() else None, scheduler=self.scheduler,
-                               n_workers=self.n_workers, progress=self.progress, backend=self.backend)
+                               n_workers=self.n_workers, progress=self.progress, backend=self.backend,
+                               announce=self.announce)
             if report.interrupted:
                 raise KeyboardInterrupt
             for m in sweep.members:
@@ -446,20 +449,21 @@ class PlanResult:
 
 def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, scheduler: str | None = None,
              n_workers: int | None = None, backend: str | BackendName = BackendName.CPU,
-             progress: bool | None = None) -> PlanResult:
+             progress: bool | None = None, announce: Callable[[str], None] | None = None) -> PlanResult:
     """Run a plan: the bisections (:func:`mu_max_many`) and the ``curve`` points, every run a member
     of a round's store in OUT/rounds (:class:`Rounds`; a second call resumes), then write mu_max.csv,
     mu_max_summary.csv, evaluations.csv and plan.toml into ``out`` (each file atomically). A
     realisation whose lo/hi runs refute the bracket has status ``bracket`` (with the reason) and
     the others go on; BracketError only when every realisation's bracket is refuted (nothing to
     report). KeyboardInterrupt if interrupted (the finished runs are kept); SweepError if another
-    driver runs ``out``; StoreWriteError on a full disk."""
+    driver runs ``out``; StoreWriteError on a full disk. ``announce``: called with the Dask
+    dashboard's address when the cluster starts."""
     import pandas as pd
 
     out = Path(out)
     configs = plan.configs()
     with Rounds(out, client=client, scheduler=scheduler, n_workers=n_workers, backend=backend,
-                progress=progress) as rounds:
+                progress=progress, announce=announce) as rounds:
         results = _bisect(configs, plan.lo, plan.hi, plan.tol, rounds.evaluate, strict=False)
         curve_jobs = [(plan.base.with_updates(theta=float(t), seed=0), float(m)) for t in plan.theta for m in plan.curve]
         curve = rounds.evaluate(curve_jobs) if curve_jobs else []

@@ -35,14 +35,17 @@ def default_paths(preset: str | Preset) -> tuple[Path, Path]:
 
 def reproduce(preset: str | Preset = Preset.QUICK, store: str | os.PathLike | None = None,
               out: str | os.PathLike | None = None, *, scheduler: str | None = None, n_workers: int | None = None,
-              progress: bool | None = None, command: str = "", backend: str | BackendName = BackendName.CPU) -> Reproduction:
-    """Run (or resume) the preset's sweep; if every member completed, make the figures and report."""
+              progress: bool | None = None, command: str = "", backend: str | BackendName = BackendName.CPU,
+              announce=None) -> Reproduction:
+    """Run (or resume) the preset's sweep; if every member completed, make the figures and report.
+    ``announce``: called with the Dask dashboard's address (:func:`slipchain.sweeps.executor.run_sweep`)."""
     sweep = load_preset(preset)
     d_store, d_out = default_paths(preset)
     store_path = Path(store) if store is not None else d_store
     out_path = Path(out) if out is not None else d_out
     st = Store.open(store_path, sweep)
-    rep = run_sweep(sweep, st, scheduler=scheduler, n_workers=n_workers, progress=progress, backend=backend)
+    rep = run_sweep(sweep, st, scheduler=scheduler, n_workers=n_workers, progress=progress, backend=backend,
+                    announce=announce)
     if rep.interrupted:
         return Reproduction(rep, None, [])
     return Reproduction(rep, *write_outputs(st, out_path, command=command or f"slipchain reproduce --preset {Preset(preset).value}"))
