@@ -70,11 +70,11 @@ def test_the_dashboard_address_is_printed_on_request_only(tmp_path):
     printed = {}
     for flag in ("--dashboard", None):
         r = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(definition), "--store",
-                            str(tmp_path / f"s{flag}"), "--workers", "1", "--no-progress", *([flag] if flag else [])],
+                            str(tmp_path / ("with" if flag else "without")), "--workers", "1", "--no-progress", *([flag] if flag else [])],
                            capture_output=True, text=True, timeout=300)
         assert r.returncode == 0, r.stderr
         printed[flag] = re.findall(r"^dashboard: http://([0-9.]+):(\d+)/status$", r.stderr, re.M)
-        assert "dashboard" not in r.stdout
+        assert "dashboard:" not in r.stdout
     (host, port), = printed["--dashboard"]
     assert ipaddress.ip_address(host).is_loopback and int(port) > 0
     assert printed[None] == []
