@@ -147,11 +147,19 @@ def _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, dt):
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def contact_power(nc, fk, uk):
+    """sum_k f_k u_k over the contacts, in a loop that writes nothing (spectral.body_explicit says
+    why); one function for every stepper, so that the fixed and the adaptive step sum alike."""
+    p = 0.0
+    for k in range(nc):
+        p += fk[k] * uk[k]
+    return p
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _contact_sums(nc, fk, uk, ca, slow):
     """Accumulate per-contact force, velocity, velocity**2, slow steps; returns sum f*u."""
-    p = 0.0
-    for k in range(nc):  # the sum in a loop that writes nothing (spectral.body_explicit says why)
-        p += fk[k] * uk[k]
+    p = contact_power(nc, fk, uk)
     for k in range(nc):
         ca[C_F, k] += fk[k]
         ca[C_U, k] += uk[k]
