@@ -29,10 +29,16 @@ def drive_of(cfg) -> str:
     return "dead_weight" if cfg.dead_weight is not None else "spring"
 
 
-def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu") -> str | None:
+def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", material: str = "elastic") -> str | None:
     """None where the combination runs, else why not (a sentence for an error message)."""
     if drive == "dead_weight" and not _GEOMETRIES[geometry].top:
         return "a half-space has no top to carry the weight (use geometry = 'slab')"
+    if material == "prony":
+        if _GEOMETRIES[geometry].spectral:
+            return (f"material = 'prony' runs on the chains ('chain', 'chain2d') only in this version (the "
+                    f"{geometry}'s k(q) does not carry the Prony series yet)")
+        if backend != "cpu":
+            return "material = 'prony' runs on the CPU only in this version"
     if backend == "cpu":
         return None
     if integrator != "fixed":
@@ -47,7 +53,7 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu") ->
 
 def config_refusal(cfg, backend: str = "cpu") -> str | None:
     """:func:`refusal` for a config."""
-    return refusal(cfg.geometry, cfg.integrator, drive_of(cfg), backend)
+    return refusal(cfg.geometry, cfg.integrator, drive_of(cfg), backend, cfg.material)
 
 
 def table() -> list[tuple[str, str, str, str, str | None]]:

@@ -35,6 +35,7 @@ from __future__ import annotations
 import numba as nb
 
 from ..scheme import C_F, C_SLOW, C_U, C_U2, N_YS_STATE, Y_FA, Y_FB
+from .cpu import contact_power
 
 STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step multiplies err by ~4)
 
@@ -43,15 +44,15 @@ STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step m
 def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
     """Per-contact sums as :func:`.cpu._contact_sums`, each step counted ``w`` times (its base steps);
     returns sum f*u. Kept apart: that one is compiled with fastmath (sums contracted to FMA), which
-    with w != 1 would change this kernel's sums in their last bits."""
-    p = 0.0
+    with w != 1 would change this kernel's sums in their last bits. The power sum f*u is the fixed
+    step's (:func:`.cpu.contact_power`): at w = 1 both steppers give the same contact work, bit for
+    bit (issue 26: it was summed here in strict order, and differed in the last bit)."""
     for k in range(nc):
         ca[C_F, k] += w * fk[k]
         ca[C_U, k] += w * uk[k]
         ca[C_U2, k] += w * uk[k] * uk[k]
         ca[C_SLOW, k] += w if abs(uk[k]) < slow else 0.0
-        p += fk[k] * uk[k]
-    return p
+    return contact_power(nc, fk, uk)
 
 
 @nb.njit(cache=True)
