@@ -95,11 +95,11 @@ def test_auto_backend_chooses_per_config_and_says_so():
         pytest.skip("numba.cuda is not usable here (neither a GPU nor the simulator)")
     fixed = _config("chain", "fixed", "spring", t_total=1e-5)
     assert isinstance(get_backend("auto", [fixed]), CUDABackend)
-    for geometry, integrator, drive in CELLS:
-        why = refusal(geometry, integrator, drive, "gpu")
-        if why is None or refusal(geometry, integrator, drive, "cpu") is not None:
+    for geometry, integrator, drive, material in CELLS:
+        why = refusal(geometry, integrator, drive, "gpu", material)
+        if why is None or refusal(geometry, integrator, drive, "cpu", material) is not None:
             continue
-        cfg = _config(geometry, integrator, drive, t_total=1e-5)
+        cfg = _config(geometry, integrator, drive, material, t_total=1e-5)
         with pytest.warns(BackendFallback, match="runs this batch on the CPU: " + why.split("(")[0]):
             assert isinstance(get_backend("auto", [fixed, cfg]), CPUBackend)
         with pytest.raises(RuntimeError, match="backend 'gpu' cannot run this config"):
