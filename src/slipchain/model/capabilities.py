@@ -20,6 +20,7 @@ from .geometries import GEOMETRIES as _GEOMETRIES
 
 GEOMETRIES = tuple(_GEOMETRIES)
 INTEGRATORS = ("fixed", "fold", "adaptive")
+MATERIALS = ("elastic", "prony")
 DRIVES = ("spring", "dead_weight")
 BACKENDS = ("cpu", "gpu")
 
@@ -60,22 +61,22 @@ def config_refusal(cfg, backend: str = "cpu") -> str | None:
     return refusal(cfg.geometry, cfg.integrator, drive_of(cfg), backend, cfg.material)
 
 
-def table() -> list[tuple[str, str, str, str, str | None]]:
-    """Every cell: (geometry, integrator, drive, backend, refusal or None)."""
-    return [(g, i, d, b, refusal(g, i, d, b))
-            for g, i, d, b in itertools.product(GEOMETRIES, INTEGRATORS, DRIVES, BACKENDS)]
+def table() -> list[tuple[str, str, str, str, str, str | None]]:
+    """Every cell: (geometry, integrator, drive, backend, material, refusal or None)."""
+    return [(g, i, d, b, m, refusal(g, i, d, b, m))
+            for m, g, i, d, b in itertools.product(MATERIALS, GEOMETRIES, INTEGRATORS, DRIVES, BACKENDS)]
 
 
 def markdown_table() -> str:
-    """The table as Markdown: one row per geometry and drive, one column per integrator and backend."""
+    """The table as Markdown: one row per material, geometry and drive, one column per integrator and backend."""
     cols = [(i, b) for b in BACKENDS for i in INTEGRATORS]
-    lines = ["| geometry | drive | " + " | ".join(f"{i} ({b})" for i, b in cols) + " |",
-             "|---|---|" + "---|" * len(cols)]
-    for g, d in itertools.product(GEOMETRIES, DRIVES):
-        cells = ["runs" if refusal(g, i, d, b) is None else "no" for i, b in cols]
-        lines.append(f"| {g} | {d} | " + " | ".join(cells) + " |")
+    lines = ["| material | geometry | drive | " + " | ".join(f"{i} ({b})" for i, b in cols) + " |",
+             "|---|---|---|" + "---|" * len(cols)]
+    for m, g, d in itertools.product(MATERIALS, GEOMETRIES, DRIVES):
+        cells = ["runs" if refusal(g, i, d, b, m) is None else "no" for i, b in cols]
+        lines.append(f"| {m} | {g} | {d} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
-__all__ = ["BACKENDS", "DRIVES", "GEOMETRIES", "INTEGRATORS", "config_refusal", "drive_of", "markdown_table",
+__all__ = ["BACKENDS", "DRIVES", "GEOMETRIES", "INTEGRATORS", "MATERIALS", "config_refusal", "drive_of", "markdown_table",
            "refusal", "table"]
