@@ -181,17 +181,22 @@ PRONY_SCAN = 64  # steps below the bound at which a Prony bulk's stability is ch
 
 @functools.lru_cache(maxsize=64)
 def _prony_stable_step(args: tuple, r: tuple, tau: tuple) -> float:
-    """The largest stable step of the chains with a Prony bulk; below it the spectral radius is
-    checked on PRONY_SCAN steps spread over four decades, and the bound lowered below any unstable
-    one found (the region need not be an interval with the arms' exponentials in it)."""
+    """The largest stable step of the chains with a Prony bulk (:func:`prony_stable_step` of their modes)."""
     B, D = chain_modes(*args)
     K_d = args[7]
     Bb, _ = chain_modes(*args[:7], 0.0, *args[8:], uniform=K_d != 0.0)
-    r_, tau_ = np.asarray(r), np.asarray(tau)
-    glassy = B + (1.0 + 0.0) * np.asarray(r).sum() * Bb
+    return prony_stable_step(B, D, Bb, np.asarray(r), np.asarray(tau))
+
+
+def prony_stable_step(B: np.ndarray, D: np.ndarray, Bb: np.ndarray, r: np.ndarray, tau: np.ndarray) -> float:
+    """The largest stable step of modes (B, D) with the Maxwell arms acting through Bb
+    (:func:`prony_amplification`); below it the spectral radius is checked on PRONY_SCAN steps spread
+    over four decades, and the bound lowered below any unstable one found (the region need not be an
+    interval with the arms' exponentials in it)."""
+    glassy = B + np.asarray(r).sum() * Bb
 
     def radius(h: float) -> float:
-        return float(np.abs(np.linalg.eigvals(prony_amplification(B, D, Bb, r_, tau_, h))).max())
+        return float(np.abs(np.linalg.eigvals(prony_amplification(B, D, Bb, r, tau, h))).max())
 
     scale = math.sqrt(max(float(np.abs(glassy).max()), 1e-300)) + float(np.abs(D).max())
     h = _largest(radius, scale)
@@ -215,9 +220,27 @@ def stable_step(cfg) -> float:
         return _chain_stable_step(*args)
     # the slab's and half-space's stiffest mode is at the grid's largest |q| (Config.omega_max), and the
     # scalar bound falls with omega: that mode alone (tests/physics/test_stability.py checks every mode)
+    if cfg.material == "prony":
+        return _slab_prony_stable_step(cfg)
     h = scalar_stable_step(np.array(cfg.omega_max**2), cfg.radiation_damping_rate)
     if cfg.dead_weight is not None:
         h = min(h, largest_stable_step(*plate_mode(cfg)))
+    return h
+
+
+def _slab_prony_stable_step(cfg) -> float:
+    """The slab under the dead weight with a Prony bulk (issue 28): the whole kernel is the bulk's,
+    so the arms act through the mode's own stiffness (Bb = B); the stiffest Fourier mode and the
+    plate's uniform mode (radiation damping at the relaxed modulus, as the elastic slab's)."""
+    from .viscoelastic import terms
+
+    r, tau = terms(cfg)
+    B = np.array([[[cfg.omega_max**2]]])
+    D = np.array([[[cfg.radiation_damping_rate]]])
+    h = prony_stable_step(B, D, B, r, tau)
+    if cfg.dead_weight is not None:
+        Bp, Dp = plate_mode(cfg)
+        h = min(h, prony_stable_step(Bp, Dp, Bp, r, tau))
     return h
 
 
@@ -240,5 +263,5 @@ def slab_modes(cfg) -> tuple[np.ndarray, np.ndarray]:
     return w2[:, None, None], np.full((w2.size, 1, 1), cfg.radiation_damping_rate)
 
 
-__all__ = ["RADIUS_TOL", "amplification", "prony_amplification", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
+__all__ = ["RADIUS_TOL", "amplification", "prony_amplification", "prony_stable_step", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
            "slab_modes", "spectral_radius", "stable_step"]

@@ -36,7 +36,8 @@ def stored_energy(system: System, state: State) -> float:
         from ..model.system import elastic_kernel
 
         d = (x - (X if cfg.dead_weight is not None else drive)).reshape(cfg.N, cfg.Ly)  # X: the plate
-        return float(kinetic - 0.5 * np.sum(d * elastic_force(d, 0.0, elastic_kernel(cfg), 1.0)))
+        body = -0.5 * np.sum(d * elastic_force(d, 0.0, elastic_kernel(cfg), 1.0))
+        return float(kinetic + body + arm_energy(system, state))
     elastic = bulk_energy(cfg, x, X)
     if cfg.dead_weight is None:  # the drive springs (none under the dead weight)
         elastic += 0.5 * cfg.K_d * np.sum((drive - X) ** 2)
@@ -58,11 +59,19 @@ def bulk_energy(cfg, x: np.ndarray, X: np.ndarray) -> float:
 
 def arm_energy(system: System, state: State) -> float:
     """Energy held by the Maxwell arms of a Prony bulk, sum_j r_j U_bulk(xi_j) [J]
-    (:mod:`slipchain.model.viscoelastic`); 0 for material 'elastic'."""
+    (:mod:`slipchain.model.viscoelastic`; U_bulk the chains' bulk springs, or the slab's kernel
+    for the fields relative to the plate); 0 for material 'elastic'."""
     cfg = system.config
     if cfg.material != "prony" or state.xi is None:
         return 0.0
     r = np.asarray(cfg.prony_E) / cfg.E
+    if geometry_of(cfg).spectral:  # the slab under the dead weight: xi relative to the plate, U = (1/2) xi . a^2 k_c xi
+        from ..model.elastic import elastic_force
+        from ..model.system import elastic_kernel
+
+        kern = elastic_kernel(cfg)
+        g = state.xi[0].reshape(r.size, cfg.N, cfg.Ly)
+        return float(sum(-0.5 * r[j] * np.sum(g[j] * elastic_force(g[j], 0.0, kern, 1.0)) for j in range(r.size)))
     return float(sum(r[j] * bulk_energy(cfg, state.xi[0, j], state.xi[1, j]) for j in range(r.size)))
 
 

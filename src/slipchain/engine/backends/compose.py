@@ -259,6 +259,19 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
         spec *= neg
         return fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(b, n)
 
+    J = batch.material.shape[2] if batch.material is not None else 0
+    if J:  # material 'prony' (under the dead weight): the arms' force too, kept in work row 2J + 2 (.viscoelastic)
+        r = batch.material[:, 0, :]
+        neg2 = np.concatenate([neg, neg])
+
+        def force():  # noqa: F811 - the viscoelastic slab's
+            g = np.einsum("bj,bjn->bn", r, batch.bstate[:, :J])
+            spec = fft.rfft2(np.concatenate([batch.x - batch.X, g]).reshape(2 * b, lx, ly), axes=(1, 2))
+            spec *= neg2
+            both = fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(2 * b, n)
+            batch.bstate[:, 2 * J + 2] = both[b:]
+            return both[:b] + both[b:]
+
     adaptive, folds, control = _stepper_inputs(batch)
     step_rows = loop(batch.geometry, adaptive, batch.material_name)
     ctl = np.zeros((b, 4), dtype=np.int64)
@@ -320,16 +333,17 @@ BODIES = {name: g.body for name, g in GEOMETRIES.items()}  # model.geometries
 
 
 SPECTRAL = spectral.BODY  # slab, halfspace
+SPECTRAL_PRONY = (viscoelastic.slab_prony_explicit, viscoelastic.slab_prony_commit, True)  # slab, dead weight, prony
 
 
 def _body(name: str):
-    return {"lattice": LATTICE, "lattice-prony": LATTICE_PRONY, "spectral": SPECTRAL}[name]
+    return {"lattice": LATTICE, "lattice-prony": LATTICE_PRONY, "spectral": SPECTRAL, "spectral-prony": SPECTRAL_PRONY}[name]
 
 
 @functools.cache
 def stepper(body: str, adaptive: bool):
     """The stepper of :func:`fixed_stepper` or :func:`adaptive_stepper` composed with a body
-    ('lattice', 'lattice-prony' or 'spectral')."""
+    ('lattice', 'lattice-prony', 'spectral' or 'spectral-prony')."""
     explicit, commit, fastmath = _body(body)
     return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
 
@@ -339,7 +353,8 @@ def loop(geometry: str, adaptive: bool, material: str = "elastic"):
     (:func:`kernel_driver`), for the slab and half-space the per-step function of its FFT driver
     (:func:`rows_driver`). One per body and stepper, shared by the geometries of a body; integrators
     'fixed' and 'fold' share the fixed stepper (the fold-aware contact solve is the row's P_FOLD);
-    the drive is the body's; ``material`` 'prony' the chains' viscoelastic body (:mod:`.viscoelastic`)."""
+    the drive is the body's; ``material`` 'prony' the viscoelastic body of the chains or of the slab
+    under the dead weight (:mod:`.viscoelastic`)."""
     body = BODIES[geometry] + ("-prony" if material == "prony" else "")
     return _loop(body, adaptive)
 

@@ -32,6 +32,7 @@ import numba as nb
 
 from ..scheme import BODY_ROWS, FASTMATH, P_K, P_KL, P_KLY, P_KT, P_KY, P_LAT, P_LY, P_M, P_ML
 from .cpu import lattice_commit, lattice_explicit
+from .spectral import body_commit, body_explicit
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -122,4 +123,53 @@ def prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     return lattice_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)[0], w_visc
 
 
-__all__ = ["BODY_ROWS", "bulk_forces", "prony_commit", "prony_explicit"]
+# The slab under the dead weight (issue 28): the whole kernel k_c(q) is the rubber's, linear in the
+# modulus for every q (the clamped top is the plate), so the arms' force is
+# -IFFT[a**2 k_c FFT(sum_j r_j xi_j)] with xi_j the arms' fields of the blocks' displacement relative
+# to the plate (rows 0 .. J-1 of the body state; rows J .. 2J-1 unused). The FFT driver
+# (:func:`.compose.fft_advance`) adds it to the elastic force it hands the body and keeps it in the
+# work row 2J + 2; the plate feels its reaction through the force's mean, as the elastic one's.
+# The radiation damping stays at the relaxed modulus (c_s from E_inf), as the drive springs do in
+# the chains.
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def slab_prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+    """The viscoelastic slab's explicit part: the elastic slab's with the arms' force already in ``Fr``."""
+    return body_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t)
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _slab_arm_work(fa, ur, Ur, un, Un):
+    """sum of the arms' force times the step's mean velocity relative to the plate (which takes the
+    reaction): a loop that writes nothing."""
+    w = 0.0
+    for i in range(un.size):
+        w += fa[i] * ((ur[i] + un[i]) - (Ur[i] + Un[i]))
+    return 0.5 * w
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _slab_relax(J, mt, br, un, Un, h):
+    """xi_j <- a_j xi_j + tau_j (1 - a_j) (u' - U') for every term."""
+    for j in range(J):
+        tau = mt[1, j]
+        a = math.exp(-h / tau)
+        c = -tau * math.expm1(-h / tau)
+        xj = br[j]
+        for i in range(un.size):
+            xj[i] = a * xj[i] + c * (un[i] - Un[i])
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def slab_prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """The viscoelastic slab's commit: the arms' work, their update, then the elastic slab's commit;
+    returns (damping work, the arms' work)."""
+    J = mt.shape[1]
+    w_visc = _slab_arm_work(br[2 * J + 2], ur, Ur, un, Un) * h
+    _slab_relax(J, mt, br, un, Un, h)
+    return body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)[0], w_visc
+
+
+__all__ = ["BODY_ROWS", "bulk_forces", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
+
