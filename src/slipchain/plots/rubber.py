@@ -50,7 +50,7 @@ def plot_rubber(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, out: str |
                 ax.errorbar(x + 0.15 * (k - 1), r["ratio"], r["ratio_err"], color=color, marker=marker, ms=5,
                             capsize=2, ls="none", mfc=color if var == "elastic" else "white")
             xs.append(x)
-            labels.append(f"{var}\n{name}")
+            labels.append(f"{var.replace('prony ', '')}\n{name}")
     ax.axhline(0.8, color="0.4", ls="--", lw=1)
     ax.axhline(1.0, color="0.7", lw=0.8)
     ax.set_xticks(xs, labels, fontsize=7)
