@@ -179,8 +179,10 @@ def test_default_compound_and_temperature_shift():
         make_config(material="prony", prony_E=[1e6, 2e6], prony_tau=[1e-3])
     with pytest.raises(ConfigError, match="'temperature' .*WLF's range"):
         make_config(material="prony", temperature=20.0 - c.C2 - 1.0)
-    with pytest.raises(ConfigError, match="runs on the chains"):
-        make_config(material="prony", geometry="slab", N=8, Ly=8)
+    with pytest.raises(ConfigError, match="runs on the slab under the dead weight only"):
+        make_config(material="prony", geometry="slab", N=8, Ly=8)  # the spring drive
+    with pytest.raises(ConfigError, match="runs with integrator = 'fold' or 'fixed'"):
+        make_config(material="prony", integrator="adaptive")
 
 
 # The slab under the dead weight (the whole kernel is the rubber's; docs/guide/viscoelastic.md)
