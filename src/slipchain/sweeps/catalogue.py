@@ -49,7 +49,7 @@ CATALOGUE: dict[str, Study] = {
                          "the slider under a hanging weight: velocity or runaway"),
     "mu-max": Study("plan", 130, "42 min", "docs/mu-max/index.md",
                     "mu_max(theta) under a dead weight by bisection, the tester's observable"),
-    "mu-max-rubber": Study("plan", 42, "TBD", "docs/fig6-rubber/index.md",
+    "mu-max-rubber": Study("plan", 42, "17 min", "docs/mu-max-rubber/index.md",
                            "mu_max(theta) under a dead weight with a viscoelastic slider"),
     "fig6-fold": Study("validation", 48, "1.4 min", "docs/fold-convergence/report.md",
                        "the fold-aware step at three dt against dt = 1e-8 s"),
