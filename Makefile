@@ -6,14 +6,15 @@ VENV := .venv
 BIN := $(VENV)/bin
 # The venv holds exactly the versions of requirements.lock (our reproducible set-up; pyproject.toml
 # declares compatible ranges for users' environments). It is rebuilt when either file changes.
-STAMP := $(VENV)/.installed-$(shell $(PY) -c "import hashlib;print(hashlib.sha1(open('pyproject.toml','rb').read()+open('requirements.lock','rb').read()).hexdigest()[:12])")
+STAMP := $(VENV)/.installed-$(shell $(PY) -c "import hashlib;print(hashlib.sha1(open('pyproject.toml','rb').read()+open('requirements.lock','rb').read()+open('requirements-nodeps.txt','rb').read()).hexdigest()[:12])")
 
 .PHONY: run test bench docs clean lock test-lower test-latest
 
-$(STAMP): pyproject.toml requirements.lock
+$(STAMP): pyproject.toml requirements.lock requirements-nodeps.txt
 	$(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -r requirements.lock
+	$(BIN)/python -m pip install -q --no-deps -r requirements-nodeps.txt
 	$(BIN)/python -m pip install -q --no-deps --no-build-isolation -e .
 	rm -f $(VENV)/.installed-*
 	touch $@

@@ -15,7 +15,7 @@ OMEGA = np.array([1.0e3, 2.0e3, 3.0e3, 5.0e3])  # rad/s, one per block
 
 
 @nb.njit(cache=True)
-def _ground_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+def _ground_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
     """Block i on a spring to the ground, m du/dt = -m omega_i**2 x (omega_i**2 in Xr[i], which never moves)."""
     for i in range(xr.size):
         un[i] = ur[i] - h * Xr[i] * xr[i]
@@ -26,11 +26,12 @@ def _ground_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
 
 
 @nb.njit(cache=True)
-def _ground_commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+def _ground_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """(``mt``, ``br``: a material's constants and state, none here.) Returns (damping work, bulk work)."""
     for i in range(xr.size):
         xr[i] += h * un[i]
         ur[i] = un[i]
-    return 0.0
+    return 0.0, 0.0
 
 
 def _run(adaptive: bool, dt: float, n_samples: int, sample_steps: int, tol: float = 0.0, levels: int = 0):
@@ -49,7 +50,7 @@ def _run(adaptive: bool, dt: float, n_samples: int, sample_steps: int, tol: floa
     out = np.zeros((1, n_samples, S.N_OUT))
     steps = np.zeros(1, dtype=np.int64)
     advance(x, u, X, U, steps, p, np.zeros((1, 1), dtype=np.int64), np.ones((1, 1)), np.zeros(1, dtype=np.int64),
-            np.zeros((1, S.N_YS, 1)), np.zeros((1, levels + 1, 2, 1)), control, n_samples, sample_steps, out,
+            np.zeros((1, S.N_YS, 1)), np.zeros((1, levels + 1, 2, 1)), control, np.zeros((1, 1)), np.zeros((1, 1)), n_samples, sample_steps, out,
             np.zeros((1, S.N_ACC)), np.zeros((1, S.N_CACC, 1)), np.full(1, -1, dtype=np.int64))
     return out[0, :, S.O_XMEAN], control[0], steps[0]
 

@@ -12,7 +12,7 @@ import xarray as xr
 
 from slipchain.engine import checkpoint as ckpt
 from slipchain.engine.simulate import run
-from slipchain.model.capabilities import DRIVES, GEOMETRIES, INTEGRATORS, refusal
+from slipchain.model.capabilities import DRIVES, GEOMETRIES, INTEGRATORS, MATERIALS, refusal
 from slipchain.model.config import ConfigError, make_config
 
 GEOMETRY = {"chain": dict(N=8), "chain2d": dict(geometry="chain2d", N=4, Ly=4),
@@ -20,29 +20,33 @@ GEOMETRY = {"chain": dict(N=8), "chain2d": dict(geometry="chain2d", N=4, Ly=4),
 DRIVE = {"spring": {}, "dead_weight": dict(dead_weight=0.7)}
 STEP = {"fixed": dict(dt=2e-8), "fold": dict(dt=1e-7), "adaptive": dict(dt=2e-8)}
 COMMON = dict(theta=0.5, start="steady", output_interval=1e-5, seed=1)
-CELLS = [(g, i, d) for g in GEOMETRIES for i in INTEGRATORS for d in DRIVES]
+CELLS = [(g, i, d, m) for m in MATERIALS for g in GEOMETRIES for i in INTEGRATORS for d in DRIVES]
 
 
-def _config(geometry, integrator, drive, **kw):
-    return make_config(**COMMON, **GEOMETRY[geometry], **DRIVE[drive], integrator=integrator,
-                       **{**STEP[integrator], **kw})
+def _config(geometry, integrator, drive, material="elastic", **kw):
+    step = STEP[integrator]
+    extra = dict(material="prony") if material == "prony" else {}
+    return make_config(**COMMON, **GEOMETRY[geometry], **DRIVE[drive], integrator=integrator, **extra,
+                       **{**step, **kw})
 
 
 class Crash(Exception):
     pass
 
 
-@pytest.mark.parametrize("geometry, integrator, drive", CELLS)
-def test_every_cell_runs_or_is_refused_by_the_table(geometry, integrator, drive, tmp_path, monkeypatch):
-    why = refusal(geometry, integrator, drive, "cpu")
+@pytest.mark.parametrize("geometry, integrator, drive, material", CELLS)
+def test_every_cell_runs_or_is_refused_by_the_table(geometry, integrator, drive, material, tmp_path, monkeypatch):
+    why = refusal(geometry, integrator, drive, "cpu", material)
     if why is not None:
         with pytest.raises(ConfigError, match="a combination that runs: " + why.split("(")[0]):
-            _config(geometry, integrator, drive, t_total=1.2e-3)
+            _config(geometry, integrator, drive, material, t_total=1.2e-3)
         return
-    cfg = _config(geometry, integrator, drive, t_total=1.2e-3)  # three chunks of 0.5 ms
+    cfg = _config(geometry, integrator, drive, material, t_total=1.2e-3)  # three chunks of 0.5 ms
     reference = run(cfg, progress=False)
     assert np.isfinite(reference["f_d"].values).all() and np.isfinite(reference["x"].values).all()
     assert reference.attrs["check_energy_balance_passed"] == 1, reference.attrs["check_energy_balance"]
+    if material == "prony":  # the bulk dissipates, and its state is part of the checkpoint (resumed below)
+        assert reference.attrs["W_bulk"] < 0 and np.abs(reference["xi"].values).max() > 0
     path = tmp_path / "run.ckpt.nc"
     original = ckpt.Checkpointer.save
 
@@ -67,13 +71,13 @@ def _trace(ds, drive):
     return ds["f_d"].values if drive == "spring" else ds["X_mean"].values
 
 
-@pytest.mark.parametrize("geometry, drive", [(g, d) for g in GEOMETRIES for d in DRIVES
-                                             if refusal(g, "adaptive", d) is None])
-def test_adaptive_step_converges_to_the_fixed_step(geometry, drive):
-    fixed = _trace(run(_config(geometry, "fixed", drive, t_total=1e-3), progress=False), drive)
+@pytest.mark.parametrize("geometry, drive, material", [(g, d, m) for m in MATERIALS for g in GEOMETRIES for d in DRIVES
+                                                       if refusal(g, "adaptive", d, "cpu", m) is None])
+def test_adaptive_step_converges_to_the_fixed_step(geometry, drive, material):
+    fixed = _trace(run(_config(geometry, "fixed", drive, material, t_total=1e-3), progress=False), drive)
     diff = []
     for tol in (1e-2, 1e-3):
-        ds = run(_config(geometry, "adaptive", drive, t_total=1e-3, step_tol=tol), progress=False)
+        ds = run(_config(geometry, "adaptive", drive, material, t_total=1e-3, step_tol=tol), progress=False)
         diff.append(float(np.abs(_trace(ds, drive) - fixed).max() / np.abs(fixed).max()))
     assert diff[0] < 3e-2  # a relative error of the order of the tolerance (measured: up to 1.1e-2)
     assert diff[1] < diff[0]  # and smaller with a tighter tolerance
@@ -90,11 +94,11 @@ def test_auto_backend_chooses_per_config_and_says_so():
         pytest.skip("numba.cuda is not usable here (neither a GPU nor the simulator)")
     fixed = _config("chain", "fixed", "spring", t_total=1e-5)
     assert isinstance(get_backend("auto", [fixed]), CUDABackend)
-    for geometry, integrator, drive in CELLS:
-        why = refusal(geometry, integrator, drive, "gpu")
-        if why is None or refusal(geometry, integrator, drive, "cpu") is not None:
+    for geometry, integrator, drive, material in CELLS:
+        why = refusal(geometry, integrator, drive, "gpu", material)
+        if why is None or refusal(geometry, integrator, drive, "cpu", material) is not None:
             continue
-        cfg = _config(geometry, integrator, drive, t_total=1e-5)
+        cfg = _config(geometry, integrator, drive, material, t_total=1e-5)
         with pytest.warns(BackendFallback, match="runs this batch on the CPU: " + why.split("(")[0]):
             assert isinstance(get_backend("auto", [fixed, cfg]), CPUBackend)
         with pytest.raises(RuntimeError, match="backend 'gpu' cannot run this config"):

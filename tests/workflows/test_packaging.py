@@ -50,7 +50,7 @@ def test_sdist_and_wheel_hold_the_package_its_presets_and_docs(dist):
     presets = sorted(p.name for p in (ROOT / "src" / "slipchain" / "presets").glob("*.toml"))
     with tarfile.open(sdist) as t:
         names = {n.split("/", 1)[1] for n in t.getnames() if "/" in n}
-    assert {"pyproject.toml", "README.md", "requirements.lock", "CHANGELOG.md", "src/slipchain/cli/__init__.py"} <= names
+    assert {"pyproject.toml", "README.md", "requirements.lock", "requirements-nodeps.txt", "CHANGELOG.md", "src/slipchain/cli/__init__.py"} <= names
     assert {f"src/slipchain/presets/{p}" for p in presets} <= names
     with zipfile.ZipFile(wheel) as z:
         wnames = set(z.namelist())

@@ -8,6 +8,8 @@
 * ``slipchain presets``: the shipped presets and plans by name, with their purpose, runs and wall time.
 * ``slipchain mechanism --store PATH``; ``slipchain figure ...`` (``slipchain figure --help`` lists the figures);
   ``slipchain tester analyze|synth|fit``.
+* ``slipchain material show [CONFIG.toml] [--T C ...] --out DIR``: the viscoelastic compound's E', E'', tan delta;
+  ``slipchain material fit MASTER.csv --T-ref C --out DIR``: Prony terms fitted to a master curve (pyvisco).
 
 Exit codes: 0 completed; 1 diverged or some members failed (results are still written, with
 their messages); 2 rejected input (nothing written); 130 interrupted by Ctrl-C, 143 by SIGTERM
@@ -24,6 +26,7 @@ from ..engine.interrupts import sigterm_as_interrupt
 from .common import EXIT_CODES, show_warnings
 from .dead_weight import mu_max
 from .figure import figure_app
+from .material import material_app
 from .run import run
 from .sweep import mechanism, presets, print_sweep_report, reproduce, sweep
 from .tester import tester_app
@@ -55,6 +58,7 @@ app.command()(sweep)
 app.add_typer(figure_app, name="figure")
 app.command()(mechanism)
 app.add_typer(tester_app, name="tester")
+app.add_typer(material_app, name="material")
 app.command()(reproduce)
 app.command("mu-max")(mu_max)
 app.command()(presets)

@@ -62,6 +62,20 @@ def fig6_3d(
         fail(str(e))
 
 
+@figure_app.command("rubber")
+def rubber(
+    store: Annotated[Path, typer.Option("--store", help="Store of a sweep with material = 'prony' over theta and v_d (and temperature, eta_c) (presets/fig6-rubber.toml).")],
+    out_dir: OutOpt,
+    elastic: Annotated[Optional[Path], typer.Option("--elastic", help="Store of its elastic twin (presets/fig6-rubber-elastic.toml).")] = None,
+) -> None:
+    """Fig. 6 with a viscoelastic slider beside the elastic model: mu_star versus theta, the load effect; report.md, table.csv, drops.csv."""
+    command = f"slipchain figure rubber --store {store}" + (f" --elastic {elastic}" if elastic else "") + f" --out {out_dir}"
+    try:
+        wrote(_figures().rubber(store, out_dir, elastic, command=command))
+    except SweepError as e:
+        fail(str(e))
+
+
 @figure_app.command("slip-maps")
 def slip_maps(
     run: Annotated[Path, typer.Option("--run", help="A run file (NetCDF) of a 2-D geometry (Ly >= 2).")],

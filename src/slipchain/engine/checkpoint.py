@@ -44,10 +44,12 @@ from .backends.base import Batch
 from .control import RowControl
 from .observers import Recorder
 
-FORMAT = 1  # bumped whenever the layout below changes; a checkpoint of another format is refused
+FORMAT = 2  # bumped whenever the layout below changes; a checkpoint of another format is refused
+READS = (1, 2)  # formats this version reads: 1 lacks the bulk's state and the bulk's work (both zero then)
 CHECKPOINT_EVERY = 60.0  # default wall-time seconds between checkpoints (slipchain run --checkpoint-every)
 # The batch's arrays; geometry, shape, the elastic kernel and the adaptive step's folds and control follow from the configs (Batch.pack).
-_BATCH_FIELDS = [f.name for f in fields(Batch) if f.name not in ("geometry", "shape", "kernel", "folds", "step_control")]
+_BATCH_FIELDS = [f.name for f in fields(Batch)
+                 if f.name not in ("geometry", "shape", "kernel", "folds", "step_control", "material")]
 
 
 class CheckpointError(ValueError):
@@ -117,10 +119,10 @@ class Checkpointer:
             raise CheckpointError(f"checkpoint {str(self.path)!r} is unreadable ({type(e).__name__}: {e}); "
                                   "delete it to start the run over") from None
         a = ds.attrs
-        if a.get("checkpoint_format") != FORMAT:
+        if a.get("checkpoint_format") not in READS:
             raise CheckpointError(f"checkpoint {str(self.path)!r} has format {a.get('checkpoint_format')!r} "
                                   f"(written by slipchain {a.get('slipchain_version', '?')}); this version reads "
-                                  f"format {FORMAT}. Delete it to start the run over")
+                                  f"formats {', '.join(map(str, READS))}. Delete it to start the run over")
         configs = [str(c) for c in np.atleast_1d(ds["config"].values)]
         mine = [s.config.to_toml() for s in systems]
         if configs != mine:
@@ -132,8 +134,10 @@ class Checkpointer:
             raise CheckpointError(f"checkpoint {str(self.path)!r} belongs to another run ({which}); give another "
                                   "--checkpoint path, or delete it to start over")
         for name in _BATCH_FIELDS:
-            value = ds[f"batch_{name}"].values
             target = getattr(batch, name)
+            if f"batch_{name}" not in ds and target.size == 0:  # nothing to restore (an elastic bulk; format 1)
+                continue
+            value = ds[f"batch_{name}"].values
             if value.shape != target.shape:
                 raise CheckpointError(f"checkpoint {str(self.path)!r}: batch array {name!r} has shape {value.shape}, "
                                       f"this run needs {target.shape}")
@@ -160,7 +164,9 @@ class Checkpointer:
             recorder.contact_sums[r] = [s.copy() for s in ds[f"rec_contact_sums_{r}"].values] if lengths.size else []
             recorder.chunk_starts[r] = [int(v) for v in ds[f"rec_chunk_starts_{r}"].values]
             recorder.n[r] = int(ds["rec_n"].values[r])
-        recorder.works[...] = ds["rec_works"].values
+        works = ds["rec_works"].values
+        recorder.works[...] = 0.0
+        recorder.works[:, :works.shape[1]] = works  # format 1: no bulk work column (zero)
         resumed = [float(v) for v in np.atleast_1d(ds["resumed_at"].values)] if "resumed_at" in ds else []
         return Restored(x0=[float(v) for v in ds["x0_mean"].values], e0=[float(v) for v in ds["e0"].values],
                         wall=float(a["wall_time_s"]), resumed_at=resumed)
@@ -171,7 +177,8 @@ def _to_dataset(systems, batch: Batch, controls: list[RowControl], rec: Recorder
     data: dict[str, tuple] = {}
     for name in _BATCH_FIELDS:
         v = getattr(batch, name)
-        data[f"batch_{name}"] = ([f"batch_{name}_{k}" for k in range(v.ndim)], v)
+        if v.size:  # (an elastic bulk has no state)
+            data[f"batch_{name}"] = ([f"batch_{name}_{k}" for k in range(v.ndim)], v)
     data["config"] = ("row", np.array([s.config.to_toml() for s in systems], dtype=object))
     data["limit"] = ("row", np.array([c.limit for c in controls], dtype=np.int64))
     data["samples_done"] = ("row", np.array([c.n for c in controls], dtype=np.int64))

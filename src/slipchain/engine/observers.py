@@ -55,7 +55,7 @@ class Recorder:
         return Recording(f_d=series[:, S.O_FD], x_mean=series[:, S.O_XMEAN], X_mean=series[:, S.O_XUMEAN],
                          chunk_starts=list(self.chunk_starts[row]), chunk_samples=[s.shape[0] for s in self.samples[row]],
                          contact_sums=list(self.contact_sums[row]),
-                         works=self.works[row][[S.A_WDRIVE, S.A_WDAMP, S.A_WCONTACT]])
+                         works=self.works[row][[S.A_WDRIVE, S.A_WDAMP, S.A_WCONTACT, S.A_WVISC]])
 
     def close(self) -> None:
         pass

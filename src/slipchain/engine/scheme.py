@@ -62,8 +62,9 @@ N_PARAMS = 19  # P_FCONST: constant force on every UL block (dead-weight drive; 
 # Output columns per sample and accumulator columns.
 O_FD, O_XMEAN, O_XUMEAN = range(3)  # mean f_d over the sample; mean x and mean X at its end
 N_OUT = 3
-A_WDRIVE, A_WDAMP, A_WCONTACT = range(3)  # work by drive point, by damping, by contacts
-N_ACC = 3
+A_WDRIVE, A_WDAMP, A_WCONTACT, A_WVISC = range(4)  # work by drive point, damping, contacts, the bulk's Maxwell arms
+N_ACC = 4
+BODY_ROWS = 4  # material 'prony': work rows of a row's body state after its 2 J internal fields (backends.viscoelastic)
 C_F, C_U, C_U2, C_SLOW = range(4)  # per-contact sums over steps: force, u, u^2, steps with |u| < slow
 N_CACC = 4
 Y_LOG, Y_P, Y_Q = range(3)  # per-contact solver state: y = log10(|u|/v*), p = 10**y, q = exp(-c y^2)

@@ -21,7 +21,7 @@ import xarray as xr
 
 from ..model.config import Config, make_config
 from ..model.system import State, System, build_system, initial_state
-from ..results.checks import stored_energy
+from ..results.checks import arm_energy, stored_energy
 from ..results.schema import assemble_run
 from .backends import BackendName, Batch, get_backend
 from .checkpoint import CHECKPOINT_EVERY, Checkpointer
@@ -86,6 +86,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     interval = sample_steps * cfg0.dt
     x0 = [float(np.mean(st.x)) for st in states0]
     e0 = [stored_energy(s, st) for s, st in zip(systems, states0)]
+    a0 = [arm_energy(s, st) for s, st in zip(systems, states0)]  # material 'prony': the arms' energy at the start
     controls = [row_control(s, x0[i], interval, extension_refusal) for i, s in enumerate(systems)]
     recorder = Recorder([s.n_contacts for s in systems])
     saver, wall_before, resumed_at = None, 0.0, []
@@ -102,7 +103,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     drive(engine, batch, controls, sample_steps=sample_steps, chunk=chunk_samples(cfg0, interval),
           interval=interval, observers=observers, checkpoint=saver)
     wall = wall_before + time.perf_counter() - wall0
-    out = [assemble_run(s, recorder.recording(i), batch.state(i), x0_mean=x0[i], e0=e0[i], interval=interval,
+    out = [assemble_run(s, recorder.recording(i), batch.state(i), x0_mean=x0[i], e0=e0[i], a0=a0[i], interval=interval,
                         steps_per_sample=sample_steps, status=c.status,
                         message=c.final_message(s.config.t_max, s.config.sem_target), sem_reached=c.sem_reached,
                         wall=wall, backend=engine.name)

@@ -53,7 +53,17 @@ ALLOWED: dict[str, str] = {
     "sem_target": "a number > 0",
     "output_interval": "a number > 0 (s), at least dt",
     "seed": "an integer >= 0",
+    "material": "one of 'elastic' (the paper's springs, with the pair damping eta), 'prony' (a viscoelastic bulk: "
+                "a Prony series, issue 28; the chains)",
+    "prony_E": "a list of numbers > 0 (Pa): the Maxwell arms' moduli E_j (material = 'prony'; absent: the default "
+               "compound, slipchain.model.viscoelastic)",
+    "prony_tau": "a list of numbers > 0 (s), as long as prony_E: the relaxation times tau_j at T_ref",
+    "temperature": "a number (°C), with material = 'prony' (absent: T_ref), where C2 + T - T_ref > 0",
+    "T_ref": "a number (°C): the temperature of prony_tau (material = 'prony'; absent: 20)",
+    "wlf_C1": "a number >= 0: WLF's C1 at T_ref (material = 'prony'; absent: the default compound's)",
+    "wlf_C2": "a number > 0 (K): WLF's C2 at T_ref (material = 'prony'; absent: the default compound's)",
 }
+PRONY_KEYS = ("prony_E", "prony_tau", "temperature", "T_ref", "wlf_C1", "wlf_C2")
 
 # Keys that older versions wrote into configs (stored run attrs, a store's sweep.toml) and that are
 # no longer part of what is simulated. Accepted and dropped when reading stored files (legacy=True);
@@ -71,7 +81,7 @@ LEGACY_KEYS: dict[str, str] = {
 # without the key ran with the fixed step and keeps that meaning.
 # t_max_cycles: 0 (no extension past t_max) until issue 26 made the automatic length follow slip cycles.
 OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0,
-                       "t_max_cycles": 0.0}
+                       "t_max_cycles": 0.0, "material": "elastic"}
 _NOT_OFF = object()
 
 # The adaptive step's largest step stays below this fraction of the stable step (Config.dt_stable).
@@ -162,6 +172,13 @@ class Config(BaseModel):
     sem_target: float = Field(0.01, gt=0)
     output_interval: float = Field(1e-5, gt=0)
     seed: int = Field(0, ge=0)
+    material: Literal["elastic", "prony"] = "elastic"
+    prony_E: list[float] | None = None
+    prony_tau: list[float] | None = None
+    temperature: float | None = None
+    T_ref: float | None = None
+    wlf_C1: float | None = Field(None, ge=0)
+    wlf_C2: float | None = Field(None, gt=0)
 
     _dt_auto: bool = PrivateAttr(default=False)
 
@@ -170,7 +187,7 @@ class Config(BaseModel):
         return isinstance(other, Config) and self.model_dump() == other.model_dump()
 
     def __hash__(self) -> int:
-        return hash(tuple(self.model_dump().items()))
+        return hash(tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in self.model_dump().items()))
 
     @model_validator(mode="wrap")
     @classmethod
@@ -180,12 +197,14 @@ class Config(BaseModel):
         (the spring drive's automatic length with t_max below it), else 0."""
         if isinstance(data, Mapping) and data.get("t_max_cycles") is None:
             data = {**data, "t_max_cycles": _default_t_max_cycles(data)}
+        if isinstance(data, Mapping) and data.get("material") == "prony":
+            data = _prony_defaults(data)
         if not isinstance(data, Mapping) or data.get("dt") is not None:
             return handler(data)
         probe = handler({**data, "dt": 1e-15})  # the fields alone (the checks below run on the result)
         try:
             dt = probe.default_dt
-        except (ArithmeticError, TypeError, ValueError):  # an invalid combination: the checks will name it
+        except (ArithmeticError, LookupError, TypeError, ValueError):  # an invalid combination: the checks name it
             dt = 1e-15
         cfg = handler({**data, "dt": dt})
         cfg._dt_auto = True
@@ -204,6 +223,7 @@ class Config(BaseModel):
                          + (f", Ly = {self.Ly})" if self.Ly > 1 else ")"))
             )
         self._check_geometry()
+        self._check_material()
         if self.output_interval < self.dt:
             raise ValueError(_message("output_interval", self.output_interval, f"at least dt = {self.dt:g}"))
         if abs(math.log10(self.v0)) + self.delta > 290:  # v* = v0*10**(+-delta) must be ordinary floats
@@ -267,12 +287,38 @@ class Config(BaseModel):
                 raise ValueError(_message("Ly", self.Ly, "1 with geometry = 'chain' (a 2-D interface is geometry = "
                                           "'chain2d', 'slab' or 'halfspace')"))
             return
-        from .capabilities import config_refusal
+        from .capabilities import drive_of, refusal
 
-        why = config_refusal(self, "cpu")  # the capability table: what does not run anywhere
+        why = refusal(self.geometry, self.integrator, drive_of(self), "cpu")  # the capability table: what runs nowhere
         if why is not None:
             key = "dead_weight" if self.dead_weight is not None else "integrator"
             raise ValueError(_message(key, getattr(self, key), f"a combination that runs: {why}"))
+
+    def _check_material(self) -> None:
+        """material = 'prony': a valid Prony series and temperature; 'elastic': no Prony key."""
+        if self.material == "elastic":
+            given = [k for k in PRONY_KEYS if getattr(self, k) is not None]
+            if given:
+                raise ValueError(_message(given[0], getattr(self, given[0]), "absent unless material = 'prony' (it "
+                                          "describes the viscoelastic bulk)"))
+            return
+        for key in ("prony_E", "prony_tau"):
+            values = getattr(self, key)
+            if not values or not all(math.isfinite(v) and v > 0 for v in values):
+                raise ValueError(_message(key, values, ALLOWED[key]))
+        if len(self.prony_E) != len(self.prony_tau):
+            raise ValueError(_message("prony_tau", self.prony_tau, f"as many terms as prony_E ({len(self.prony_E)})"))
+        for key in ("temperature", "T_ref", "wlf_C1", "wlf_C2"):
+            if not math.isfinite(getattr(self, key)):
+                raise ValueError(_message(key, getattr(self, key), ALLOWED[key] + ", finite"))
+        if not self.wlf_C2 + self.temperature - self.T_ref > 0:
+            raise ValueError(_message("temperature", self.temperature, f"above T_ref - C2 = "
+                                      f"{self.T_ref - self.wlf_C2:g} °C (WLF's range)"))
+        from .capabilities import config_refusal
+
+        why = config_refusal(self, "cpu")
+        if why is not None:
+            raise ValueError(_message("material", self.material, f"a combination that runs: {why}"))
 
     @property
     def dt_stable(self) -> float:
@@ -292,8 +338,12 @@ class Config(BaseModel):
         error at slip events; 1e-7 s at the paper's values in every geometry), for integrator =
         'fixed' also at most STABLE_FRACTION of the unique-root limit (2e-8 s at epsilon = 1e-2, the
         paper's step). Measured (16 x 8 slab, 1 ms of stick-slip): the energy balance's residual is
-        2.4e-4, 1.2e-3 and 5.9e-3 at a base step of 5e-8, 1e-7 and 2e-7 s."""
-        bound = min(STABLE_FRACTION * self.dt_stable / 2**DEFAULT_DT_LEVELS, 0.1 / self.omega0)
+        2.4e-4, 1.2e-3 and 5.9e-3 at a base step of 5e-8, 1e-7 and 2e-7 s. With material = 'prony'
+        (which the adaptive step does not run) no headroom for doubling: 1e-7 s with the default
+        compound at 20 and 11 °C, fold (measured, N = 301, theta = 1, 20 ms from the steady start:
+        mu_star 0.8085, 0.8099, 0.8111 at 1e-7, 5e-8, 2e-8 s, each +- 0.0067)."""
+        headroom = 1 if self.material == "prony" else 2**DEFAULT_DT_LEVELS  # (prony: no adaptive step to double)
+        bound = min(STABLE_FRACTION * self.dt_stable / headroom, 0.1 / self.omega0)
         if self.integrator == "fixed":
             bound = min(bound, STABLE_FRACTION * self.dt_unique_root_limit)
         decade = 10.0 ** math.floor(math.log10(bound))
@@ -466,6 +516,29 @@ class Config(BaseModel):
         return "\n".join(lines) + "\n"
 
 
+def _prony_defaults(data: Mapping[str, Any]) -> dict[str, Any]:
+    """material = 'prony' with keys absent: the default compound's Prony terms (both lists absent)
+    and WLF constants, T_ref = 20 °C, temperature = T_ref, and eta = 0 (the pair damping was a
+    stand-in for the bulk's loss, which the Prony series now carries; give eta to keep it), and
+    integrator = 'fold' (the adaptive step does not run with this material yet: the capability
+    table, :mod:`slipchain.model.capabilities`, says why)."""
+    from .viscoelastic import DEFAULT_COMPOUND as D
+
+    out = dict(data)
+    if out.get("prony_E") is None and out.get("prony_tau") is None:
+        out["prony_E"], out["prony_tau"] = list(D.E), list(D.tau)
+    for key, value in (("T_ref", D.T_ref), ("wlf_C1", D.C1), ("wlf_C2", D.C2)):
+        if out.get(key) is None:
+            out[key] = value
+    if out.get("temperature") is None:
+        out["temperature"] = out["T_ref"]
+    if out.get("eta") is None:
+        out["eta"] = 0.0
+    if out.get("integrator") is None:
+        out["integrator"] = "fold"
+    return out
+
+
 def _default_t_max_cycles(data: Mapping[str, Any]) -> float:
     """t_max_cycles where the input does not give it: DEFAULT_T_MAX_CYCLES for the spring drive's
     automatic length with t_max below it, else 0 (the extension could not act: a fixed length, a
@@ -480,6 +553,8 @@ def _default_t_max_cycles(data: Mapping[str, Any]) -> float:
 
 
 def _toml_value(value: Any) -> str:
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):
@@ -515,6 +590,8 @@ def _coerce_numbers(data: Mapping[str, Any]) -> dict[str, Any]:
         if field is not None and field.annotation in (float, float | None):
             if isinstance(value, int) and not isinstance(value, bool):
                 out[key] = float(value)
+        elif field is not None and field.annotation == list[float] | None and isinstance(value, (list, tuple)):
+            out[key] = [float(v) if isinstance(v, int) and not isinstance(v, bool) else v for v in value]
     return out
 
 
@@ -587,4 +664,4 @@ def load_config(path: str | Path | None = None, overrides: Sequence[str] = ()) -
     return make_config(data)
 
 
-__all__ = ["ALLOWED", "DEFAULT_T_MAX_CYCLES", "LEGACY_KEYS", "OFF", "STABLE_FRACTION", "Config", "ConfigError", "config_from_toml", "load_config", "make_config", "parse_override", "read_toml"]
+__all__ = ["ALLOWED", "DEFAULT_T_MAX_CYCLES", "LEGACY_KEYS", "OFF", "PRONY_KEYS", "STABLE_FRACTION", "Config", "ConfigError", "config_from_toml", "load_config", "make_config", "parse_override", "read_toml"]

@@ -65,14 +65,14 @@ def _wavenumbers(n: int) -> np.ndarray:
 
 
 def chain_modes(N: int, Ly: int, m: float, N_L: int, K: float, K_L: float, K_T: float, K_d: float, K_Y: float,
-                K_LY: float, eta: float) -> tuple[np.ndarray, np.ndarray]:
+                K_LY: float, eta: float, uniform: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(B, D) = (M^-1 K, M^-1 C), shape (modes, 2, 2), of the chains' distinct Fourier modes (module
     docstring); modes with the same (cos qx, cos qy) are counted once. The dead weight's
-    translation mode (K_d = 0, q = 0) is left out."""
+    translation mode (K_d = 0, q = 0) is left out (``uniform``: keep it or not, whatever K_d)."""
     sx = 2.0 - 2.0 * np.cos(2.0 * np.pi * _wavenumbers(N) / N)
     sy = 2.0 - 2.0 * np.cos(2.0 * np.pi * _wavenumbers(Ly) / Ly)
     sx, sy = (s.ravel() for s in np.meshgrid(sx, sy, indexing="ij"))
-    if K_d == 0.0:
+    if not (K_d != 0.0 if uniform is None else uniform):
         sx, sy = sx[1:], sy[1:]
     k = np.empty((sx.size, 2, 2))
     k[:, 0, 0] = K * sx + K_Y * sy + K_T
@@ -135,18 +135,112 @@ def _chain_stable_step(*args: float) -> float:
     return largest_stable_step(*chain_modes(*args))
 
 
+def prony_amplification(B: np.ndarray, D: np.ndarray, Bb: np.ndarray, r: np.ndarray, tau: np.ndarray,
+                        h: float) -> np.ndarray:
+    """The step's amplification matrices with a Prony bulk (issue 28), (modes, (2 + J) d, (2 + J) d) in
+    (x/h, v, xi_1/h ... xi_J/h): the explicit step with the Maxwell arms' force -h^2 r_j Bb xi_j/h
+    (Bb = M^-1 K_bulk, the springs without the drive's) and their exponential update
+    ``xi_j' = a_j xi_j + tau_j (1 - a_j) v'`` (:mod:`slipchain.model.viscoelastic`)."""
+    n, d, _ = B.shape
+    J = len(r)
+    a = np.exp(-h / np.asarray(tau))
+    c = np.asarray(tau) * -np.expm1(-h / np.asarray(tau)) / h
+    eye = np.broadcast_to(np.eye(d), B.shape)
+    vrow = np.empty((n, d, (2 + J) * d))  # v' in terms of the old state
+    vrow[:, :, :d] = -h * h * B
+    vrow[:, :, d:2 * d] = eye - h * D
+    for j in range(J):
+        vrow[:, :, (2 + j) * d:(3 + j) * d] = -h * h * r[j] * Bb
+    A = np.zeros((n, (2 + J) * d, (2 + J) * d))
+    A[:, :d] = vrow
+    A[:, :d, :d] += eye  # x/h' = x/h + v'
+    A[:, d:2 * d] = vrow
+    for j in range(J):
+        rows = slice((2 + j) * d, (3 + j) * d)
+        A[:, rows] = c[j] * vrow
+        A[:, rows, rows] += a[j] * eye
+    return A
+
+
+def _largest(radius, scale: float, rel: float = 1e-10) -> float:
+    """The largest h with radius(h) <= 1 + RADIUS_TOL, by doubling from 1e-3/scale then bisection."""
+    lo, hi = 0.0, 1e-3 / scale
+    while radius(hi) <= 1.0 + RADIUS_TOL:
+        lo, hi = hi, 2.0 * hi
+    while hi - lo > rel * hi:
+        mid = 0.5 * (lo + hi)
+        if radius(mid) <= 1.0 + RADIUS_TOL:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+PRONY_SCAN = 64  # steps below the bound at which a Prony bulk's stability is checked as well
+
+
+@functools.lru_cache(maxsize=64)
+def _prony_stable_step(args: tuple, r: tuple, tau: tuple) -> float:
+    """The largest stable step of the chains with a Prony bulk (:func:`prony_stable_step` of their modes)."""
+    B, D = chain_modes(*args)
+    K_d = args[7]
+    Bb, _ = chain_modes(*args[:7], 0.0, *args[8:], uniform=K_d != 0.0)
+    return prony_stable_step(B, D, Bb, np.asarray(r), np.asarray(tau))
+
+
+def prony_stable_step(B: np.ndarray, D: np.ndarray, Bb: np.ndarray, r: np.ndarray, tau: np.ndarray) -> float:
+    """The largest stable step of modes (B, D) with the Maxwell arms acting through Bb
+    (:func:`prony_amplification`); below it the spectral radius is checked on PRONY_SCAN steps spread
+    over four decades, and the bound lowered below any unstable one found (the region need not be an
+    interval with the arms' exponentials in it)."""
+    glassy = B + np.asarray(r).sum() * Bb
+
+    def radius(h: float) -> float:
+        return float(np.abs(np.linalg.eigvals(prony_amplification(B, D, Bb, r, tau, h))).max())
+
+    scale = math.sqrt(max(float(np.abs(glassy).max()), 1e-300)) + float(np.abs(D).max())
+    h = _largest(radius, scale)
+    for trial in np.geomspace(h * 1e-4, h, PRONY_SCAN)[::-1]:
+        if radius(trial) > 1.0 + RADIUS_TOL:
+            h = _largest(lambda x: radius(x) if x < trial else 2.0, scale)  # below the unstable island
+    return h
+
+
 def stable_step(cfg) -> float:
     """The largest stable step dt [s] of ``cfg``'s geometry and drive (module docstring); the
     scheme is stable for every dt below it."""
     if geometry_of(cfg).body == "lattice":
         K_d = 0.0 if cfg.dead_weight is not None else cfg.K_d
-        return _chain_stable_step(cfg.N, cfg.Ly, cfg.m, cfg.N_L, cfg.K, cfg.K_L, cfg.K_T, K_d, cfg.K_Y, cfg.K_LY,
-                                  cfg.eta)
+        args = (cfg.N, cfg.Ly, cfg.m, cfg.N_L, cfg.K, cfg.K_L, cfg.K_T, K_d, cfg.K_Y, cfg.K_LY, cfg.eta)
+        if cfg.material == "prony":
+            from .viscoelastic import terms
+
+            r, tau = terms(cfg)
+            return _prony_stable_step(args, tuple(r), tuple(tau))
+        return _chain_stable_step(*args)
     # the slab's and half-space's stiffest mode is at the grid's largest |q| (Config.omega_max), and the
     # scalar bound falls with omega: that mode alone (tests/physics/test_stability.py checks every mode)
+    if cfg.material == "prony":
+        return _slab_prony_stable_step(cfg)
     h = scalar_stable_step(np.array(cfg.omega_max**2), cfg.radiation_damping_rate)
     if cfg.dead_weight is not None:
         h = min(h, largest_stable_step(*plate_mode(cfg)))
+    return h
+
+
+def _slab_prony_stable_step(cfg) -> float:
+    """The slab under the dead weight with a Prony bulk (issue 28): the whole kernel is the bulk's,
+    so the arms act through the mode's own stiffness (Bb = B); the stiffest Fourier mode and the
+    plate's uniform mode (radiation damping at the relaxed modulus, as the elastic slab's)."""
+    from .viscoelastic import terms
+
+    r, tau = terms(cfg)
+    B = np.array([[[cfg.omega_max**2]]])
+    D = np.array([[[cfg.radiation_damping_rate]]])
+    h = prony_stable_step(B, D, B, r, tau)
+    if cfg.dead_weight is not None:
+        Bp, Dp = plate_mode(cfg)
+        h = min(h, prony_stable_step(Bp, Dp, Bp, r, tau))
     return h
 
 
@@ -169,5 +263,5 @@ def slab_modes(cfg) -> tuple[np.ndarray, np.ndarray]:
     return w2[:, None, None], np.full((w2.size, 1, 1), cfg.radiation_damping_rate)
 
 
-__all__ = ["RADIUS_TOL", "amplification", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
+__all__ = ["RADIUS_TOL", "amplification", "prony_amplification", "prony_stable_step", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
            "slab_modes", "spectral_radius", "stable_step"]

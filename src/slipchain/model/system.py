@@ -113,9 +113,11 @@ class State:
     X: np.ndarray  # UL displacements
     U: np.ndarray  # UL velocities
     step: int = 0  # time steps taken; t = step*dt
+    xi: np.ndarray | None = None  # material 'prony': the Maxwell arms' fields (2 layers, J terms, n); None: zero
 
     def copy(self) -> "State":
-        return State(self.x.copy(), self.u.copy(), self.X.copy(), self.U.copy(), self.step)
+        return State(self.x.copy(), self.u.copy(), self.X.copy(), self.U.copy(), self.step,
+                     None if self.xi is None else self.xi.copy())
 
 
 def initial_state(system: System) -> State:

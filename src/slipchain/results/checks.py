@@ -1,8 +1,10 @@
 """Physics checks after a run: energy balance and the slider following the drive.
 
-Energy balance: the stored energy E = kinetic + elastic (all springs, drive springs included)
-changes by the work of the drive point minus what damping and contacts dissipate,
-``E(t) - E(0) = W_drive + W_damping + W_contacts`` (the last two are negative). The scheme is first order, so the balance holds to O(dt) relative to the stored energy; over a
+Energy balance: the stored energy E = kinetic + elastic (all springs, drive springs included, and
+with material 'prony' the energy held by the Maxwell arms) changes by the work of the drive point
+minus what damping, contacts and the viscoelastic bulk dissipate,
+``E(t) - E(0) = W_drive + W_damping + W_contacts (+ W_bulk)`` (the last ones are negative; W_bulk
+is the arms' work on the blocks plus the change of their energy, issue 28). The scheme is first order, so the balance holds to O(dt) relative to the stored energy; over a
 long run it is a small fraction of the drive work. Tolerance: ENERGY_RTOL of W_drive.
 
 Displacement: in steady sliding the mean interface-layer velocity over the steady window
@@ -23,7 +25,8 @@ DISPLACEMENT_RTOL = 0.1
 
 
 def stored_energy(system: System, state: State) -> float:
-    """Kinetic plus elastic energy of one realisation [J]."""
+    """Kinetic plus elastic energy of one realisation [J], the Maxwell arms' included (material
+    'prony': :func:`arm_energy`)."""
     cfg = system.config
     x, u, X, U = state.x, state.u, state.X, state.U
     drive = cfg.v_d * state.step * cfg.dt
@@ -33,23 +36,43 @@ def stored_energy(system: System, state: State) -> float:
         from ..model.system import elastic_kernel
 
         d = (x - (X if cfg.dead_weight is not None else drive)).reshape(cfg.N, cfg.Ly)  # X: the plate
-        return float(kinetic - 0.5 * np.sum(d * elastic_force(d, 0.0, elastic_kernel(cfg), 1.0)))
+        body = -0.5 * np.sum(d * elastic_force(d, 0.0, elastic_kernel(cfg), 1.0))
+        return float(kinetic + body + arm_energy(system, state))
+    elastic = bulk_energy(cfg, x, X)
+    if cfg.dead_weight is None:  # the drive springs (none under the dead weight)
+        elastic += 0.5 * cfg.K_d * np.sum((drive - X) ** 2)
+    return float(kinetic + elastic + arm_energy(system, state))
+
+
+def bulk_energy(cfg, x: np.ndarray, X: np.ndarray) -> float:
+    """Elastic energy of the chains' bulk springs (K, K_L, K_T; on chain2d's lattice also K_Y, K_LY;
+    not the drive springs) for displacement fields x, X [J]."""
     if geometry_of(cfg).two_d:  # chain2d: the (Lx, Ly) lattice, row-major (model.system)
         g = (cfg.N, cfg.Ly)
         xg, Xg = x.reshape(g), X.reshape(g)
         elastic = sum(0.5 * k * np.sum((np.roll(f, -1, axis=ax) - f) ** 2)
                       for k, f, ax in ((cfg.K, xg, 0), (cfg.K_L, Xg, 0), (cfg.K_Y, xg, 1), (cfg.K_LY, Xg, 1)))
-        elastic += 0.5 * cfg.K_T * np.sum((X - x) ** 2)
-        if cfg.dead_weight is None:
-            elastic += 0.5 * cfg.K_d * np.sum((drive - X) ** 2)
-        return float(kinetic + elastic)
-    elastic = (
-        0.5 * cfg.K * np.sum((np.roll(x, -1) - x) ** 2)
-        + 0.5 * cfg.K_L * np.sum((np.roll(X, -1) - X) ** 2)
-        + 0.5 * cfg.K_T * np.sum((X - x) ** 2)
-        + (0.5 * cfg.K_d * np.sum((drive - X) ** 2) if cfg.dead_weight is None else 0.0)  # no drive springs
-    )
-    return float(kinetic + elastic)
+        return float(elastic + 0.5 * cfg.K_T * np.sum((X - x) ** 2))
+    return float(0.5 * cfg.K * np.sum((np.roll(x, -1) - x) ** 2) + 0.5 * cfg.K_L * np.sum((np.roll(X, -1) - X) ** 2)
+                 + 0.5 * cfg.K_T * np.sum((X - x) ** 2))
+
+
+def arm_energy(system: System, state: State) -> float:
+    """Energy held by the Maxwell arms of a Prony bulk, sum_j r_j U_bulk(xi_j) [J]
+    (:mod:`slipchain.model.viscoelastic`; U_bulk the chains' bulk springs, or the slab's kernel
+    for the fields relative to the plate); 0 for material 'elastic'."""
+    cfg = system.config
+    if cfg.material != "prony" or state.xi is None:
+        return 0.0
+    r = np.asarray(cfg.prony_E) / cfg.E
+    if geometry_of(cfg).spectral:  # the slab under the dead weight: xi relative to the plate, U = (1/2) xi . a^2 k_c xi
+        from ..model.elastic import elastic_force
+        from ..model.system import elastic_kernel
+
+        kern = elastic_kernel(cfg)
+        g = state.xi[0].reshape(r.size, cfg.N, cfg.Ly)
+        return float(sum(-0.5 * r[j] * np.sum(g[j] * elastic_force(g[j], 0.0, kern, 1.0)) for j in range(r.size)))
+    return float(sum(r[j] * bulk_energy(cfg, state.xi[0, j], state.xi[1, j]) for j in range(r.size)))
 
 
 @dataclass(frozen=True)
@@ -61,14 +84,19 @@ class CheckResult:
     message: str
 
 
-def energy_check(delta_e: float, w_drive: float, w_damp: float, w_contact: float, rtol: float = ENERGY_RTOL) -> CheckResult:
-    residual = delta_e - (w_drive + w_damp + w_contact)
+def energy_check(delta_e: float, w_drive: float, w_damp: float, w_contact: float, w_bulk: float | None = None,
+                 rtol: float = ENERGY_RTOL) -> CheckResult:
+    """The balance dE = W_drive + W_damp + W_contact (+ W_bulk, the Prony bulk's dissipation: a
+    material 'prony' run gives it, and the message names it)."""
+    residual = delta_e - (w_drive + w_damp + w_contact + (w_bulk or 0.0))
     scale = max(abs(w_drive), abs(delta_e), 1e-300)
     rel = abs(residual) / scale
+    bulk = (" + W_bulk", f", W_bulk = {w_bulk:.4e} J") if w_bulk is not None else ("", "")
     return CheckResult(
         "energy_balance", bool(rel <= rtol), float(rel), rtol,
-        f"energy balance: |dE - (W_drive + W_damp + W_contact)| / W_drive = {rel:.2e} (tolerance {rtol:g}); "
-        f"dE = {delta_e:.4e} J, W_drive = {w_drive:.4e} J, W_damp = {w_damp:.4e} J, W_contact = {w_contact:.4e} J",
+        f"energy balance: |dE - (W_drive + W_damp + W_contact{bulk[0]})| / W_drive = {rel:.2e} (tolerance {rtol:g}); "
+        f"dE = {delta_e:.4e} J, W_drive = {w_drive:.4e} J, W_damp = {w_damp:.4e} J, W_contact = {w_contact:.4e} J"
+        + bulk[1],
     )
 
 

@@ -20,7 +20,7 @@ import xarray as xr
 
 from .._version import __version__
 from ..model.system import DEAD_WEIGHT_RAMP, State, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
-from .checks import CheckResult, displacement_check, energy_check, stored_energy
+from .checks import CheckResult, arm_energy, displacement_check, energy_check, stored_energy
 from .observables import SLOW_FRACTION, steady_estimate, window_velocity
 from .velocity import REL_TOL, VelocityFit, VelocityStatus, steady_velocity
 
@@ -76,6 +76,7 @@ RUN_VARIABLES: tuple[Entry, ...] = (
     Entry("u", "block", "m/s", "final interface-layer velocities"),
     Entry("X", "block", "m", "final upper-layer displacements"),
     Entry("U", "block", "m/s", "final upper-layer velocities"),
+    Entry("xi", "layer, term, block", "m", "material 'prony' only: final fields of the Maxwell arms (issue 28)"),
 )
 
 RUN_ATTRIBUTES: tuple[Entry, ...] = (
@@ -109,6 +110,8 @@ RUN_ATTRIBUTES: tuple[Entry, ...] = (
     Entry("W_drive", "", "J", "work of the drive"),
     Entry("W_damping", "", "J", "work of the inter-block damping (negative)"),
     Entry("W_contacts", "", "J", "work of the contact forces (negative)"),
+    Entry("W_bulk", "", "J", "material 'prony' only: work of the viscoelastic bulk, what its Maxwell arms dissipated "
+          "(negative)"),
     Entry("check_<name>", "", "", "value of each physics check (energy_balance, slider_follows_drive)"),
     Entry("check_<name>_passed", "", "", "1 if that check passed"),
     Entry("drive", "", "", "dead-weight drive only: 'dead-weight'"),
@@ -167,7 +170,8 @@ class Recording:
     sample, ``x_mean``/``X_mean`` mean layer displacements at its end. Per chunk c (starting at
     sample ``chunk_starts[c]``, ``chunk_samples[c]`` samples long): ``contact_sums[c]``, an
     (N_c, 4) array of per-contact sums over its steps (force, velocity, velocity**2, slow steps).
-    ``works``: (W_drive, W_damping, W_contacts) [J].
+    ``works``: (W_drive, W_damping, W_contacts, W_visc) [J], W_visc the Maxwell arms' work on the
+    blocks (material 'prony'; 0 otherwise).
     """
 
     f_d: np.ndarray
@@ -180,6 +184,7 @@ class Recording:
 
 
 def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float, e0: float, interval: float,
+                 a0: float = 0.0,
                  steps_per_sample: int, status: Status, message: str, sem_reached: bool, wall: float,
                  backend: str) -> xr.Dataset:
     """The run Dataset (the schema above) from a recording: MSER transient, mu_star and its error,
@@ -192,8 +197,11 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
     est = steady_estimate(fd / norm) if n else None
     start = est.start if est else 0
     checks: list[CheckResult] = []
+    prony = cfg.material == "prony"
+    # the bulk's dissipation: the arms' work on the blocks plus the change of their energy (a0 at the start)
+    w_bulk = float(rec.works[3] + arm_energy(system, final) - a0) if prony else None
     if status != Status.DIVERGED and n:
-        checks.append(energy_check(stored_energy(system, final) - e0, *rec.works))
+        checks.append(energy_check(stored_energy(system, final) - e0, *rec.works[:3], w_bulk))
         if est is not None and est.n_samples >= 2 and cfg.dead_weight is None:
             checks.append(displacement_check(window_velocity(rec.x_mean, start, x0_mean, interval), cfg.v_d))
         failed = [c for c in checks if not c.passed]
@@ -225,6 +233,8 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
         data_vars={k: (_VARIABLES[k].dims, v, _var_attrs(_VARIABLES[k])) for k, v in values.items()},
         coords={"time": ("time", time, {"units": "s"}), "contact": np.arange(system.n_contacts), "block": np.arange(cfg.n_blocks)},
     )
+    if prony and final.xi is not None:  # the arms' fields: a run continued from this state goes on exactly
+        ds["xi"] = (("layer", "term", "block"), final.xi, _var_attrs(_VARIABLES["xi"]))
     has_contacts = est is not None and system.n_contacts > 0
     attrs: dict[str, Any] = {
         "title": "slipchain two-chain friction model run",
@@ -256,6 +266,8 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
         "W_damping": rec.works[1],
         "W_contacts": rec.works[2],
     }
+    if prony:
+        attrs["W_bulk"] = w_bulk
     if cfg.dead_weight is not None:
         after = after_ramp(cfg, time)
         attrs.update(dead_weight_attrs(system, time[after], rec.X_mean[after]))

@@ -74,7 +74,8 @@ class Member:
 
 # Options added after 0.1.0 whose absent value (None) switches a feature off: left out of the hash
 # while off, so stores written before the option existed stay valid.
-OPTIONAL_FEATURES = ("dead_weight", "t_decide", "t_ramp")  # absent (None): left out of the hashed text
+OPTIONAL_FEATURES = ("dead_weight", "t_decide", "t_ramp", "prony_E", "prony_tau", "temperature", "T_ref", "wlf_C1",
+                     "wlf_C2")  # absent (None): left out of the hashed text
 
 
 def member_id(config: Config) -> str:
@@ -144,6 +145,8 @@ class SweepDefinition:
 
 
 def _toml(v: Any) -> str:
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml(x) for x in v) + "]"
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, str):

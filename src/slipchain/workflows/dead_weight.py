@@ -545,7 +545,10 @@ def mu_max_report(summary: "pd.DataFrame", table: "pd.DataFrame", spring: "pd.Da
     """report.md: the numbers behind the figure and what they say."""
     from ..analysis.fit import g_max
 
-    lines = ["# mu_max(theta) under a dead weight: the model measured as the tester measures", "",
+    slider = ("elastic springs" if base.material == "elastic"
+              else f"{base.material} rubber at {base.temperature:g} °C")
+    # the title names the slider: each report of the site has its own (issue 30)
+    lines = [f"# mu_max(theta) under a dead weight, {slider}: the model measured as the tester measures", "",
              f"From `{folder}` (`slipchain mu-max`; N = {base.N}, eta_c = {base.eta_c:g} 1/s, epsilon = {base.epsilon:g}, "
              f"t_decide = {base.t_decide}, t_max = {base.t_max:g} s). Every contact sliding steadily would give at most "
              f"g_max = {g_max(base.delta, base.c):.4f} (eq. 1 averaged over v*).", "",

@@ -65,6 +65,28 @@ def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "",
                                                                              wall=wall))]
 
 
+def rubber(store: str | os.PathLike, out: str | os.PathLike, elastic: str | os.PathLike | None = None,
+           command: str = "") -> list[Path]:
+    """Fig. 6 with the viscoelastic slider (issue 28): the figure, report.md, table.csv (seed means) and
+    drops.csv (the load effect per variant, eta_c and velocity) from a store of material = 'prony'
+    sweeping temperature, theta, eta_c and v_d, beside its elastic twin's store (``elastic``)."""
+    from ..analysis.rubber import report_markdown, rubber_data
+    from ..plots.rubber import plot_rubber
+    from ..results.io import write_text_atomic
+
+    need = {"theta", "v_d"}
+    rub = sweep_dataset(store, need, "the viscoelastic Fig. 6")
+    ela = sweep_dataset(elastic, need, "the viscoelastic Fig. 6's elastic twin") if elastic is not None else None
+    try:
+        table, drop, attrs = rubber_data(rub, ela)
+    except ValueError as e:
+        raise SweepError(str(e)) from None
+    paths = plot_rubber(table, drop, attrs, out)
+    paths += [write_csv(frame, Path(out) / name, float_format="%.6g")
+              for name, frame in (("table.csv", table), ("drops.csv", drop))]
+    return paths + [write_text_atomic(Path(out) / "report.md", report_markdown(table, drop, attrs, command=command))]
+
+
 def slip_maps(run: str | os.PathLike, out: str | os.PathLike, duration: float, interval: float) -> list[Path]:
     """Continue a 2-D run (a run file) for ``duration`` s recording u and x every ``interval`` s;
     draw the maps around its largest slip event; write events.csv (every cluster in (t, x, y))."""

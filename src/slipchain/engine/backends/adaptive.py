@@ -46,7 +46,7 @@ def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
     returns sum f*u. Kept apart: that one is compiled with fastmath (sums contracted to FMA), which
     with w != 1 would change this kernel's sums in their last bits. The power sum f*u is the fixed
     step's (:func:`.cpu.contact_power`): at w = 1 both steppers give the same contact work, bit for
-    bit (it was summed here in strict order, and differed in the last bit)."""
+    bit (issue 26: it was summed here in strict order, and differed in the last bit)."""
     for k in range(nc):
         ca[C_F, k] += w * fk[k]
         ca[C_U, k] += w * uk[k]

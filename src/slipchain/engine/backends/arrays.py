@@ -131,7 +131,8 @@ class ArrayBackend:
                 cacc[:, C_SLOW] += xp.where(gate & valid & (xp.abs(uk) < slow), 1.0, 0.0)
                 fsum = k0 * (n * vd * t - sx)
                 work = xp.concatenate([fsum * vd * dt, xp.sum(damp * un, axis=1, keepdims=True) * dt,
-                                       -xp.sum(fk * uk, axis=1, keepdims=True) * dt], axis=1)
+                                       -xp.sum(fk * uk, axis=1, keepdims=True) * dt,
+                                       xp.zeros((b, N_ACC - 3))], axis=1)  # (elastic only: no bulk work)
                 acc += xp.where(gate, work, 0.0)
                 fd += xp.where(gate, fsum / n, 0.0)
                 x = xp.where(gate, x + dt * un, x)

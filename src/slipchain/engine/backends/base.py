@@ -46,6 +46,13 @@ class Batch:
     kernel: np.ndarray | None = None
     folds: np.ndarray | None = None
     step_control: np.ndarray | None = None
+    bstate: np.ndarray | None = None  # (B, 2J + 4, N): the bulk's internal fields (material 'prony'; J = 0: elastic)
+    material: np.ndarray | None = None  # (B, 2, J): r_j and tau_j of each row's Prony series
+
+    @property
+    def material_name(self) -> str:
+        """'prony' where the rows carry a Prony series, else 'elastic'."""
+        return "prony" if self.material is not None and self.material.shape[2] > 0 else "elastic"
 
     @classmethod
     def pack(cls, systems: list[System], states: list[State]) -> "Batch":
@@ -55,6 +62,9 @@ class Batch:
         adaptive = c0.integrator == "adaptive"
         if any((s.config.integrator == "adaptive") != adaptive for s in systems):
             raise ValueError("a batch runs integrator = 'adaptive' in all its rows or in none")
+        n_terms = {len(s.config.prony_E or ()) for s in systems}
+        if len(n_terms) > 1 or {s.config.material for s in systems} != {c0.material}:
+            raise ValueError("a batch needs one material and as many Prony terms in every row")
         b = len(systems)
         cmax = max(1, max(s.n_contacts for s in systems))
         params = np.zeros((b, S.N_PARAMS))
@@ -90,6 +100,17 @@ class Batch:
                     h = cf.dt * 2.0**k
                     folds[r, k, 0, :c], folds[r, k, 1, :c] = S.fold_points(
                         cf.m * (1.0 + h * cf.eta_c) * s.vstar, h * cf.epsilon * cf.f0, cf.c)
+        J = n_terms.pop()
+        n = c0.n_blocks
+        material = np.zeros((b, 2, J))
+        bstate = np.zeros((b, 2 * J + S.BODY_ROWS if J else 0, n))
+        if J:
+            from ...model.viscoelastic import terms
+
+            for r, s in enumerate(systems):
+                material[r, 0], material[r, 1] = terms(s.config)
+                if states[r].xi is not None:
+                    bstate[r, :2 * J] = states[r].xi.reshape(2 * J, n)
         return cls(
             x=np.stack([s.x for s in states]).astype(float),
             u=np.stack([s.u for s in states]).astype(float),
@@ -107,10 +128,15 @@ class Batch:
             kernel=_kernels(systems),
             folds=folds,
             step_control=step_control,
+            bstate=bstate,
+            material=material,
         )
 
     def state(self, row: int) -> State:
-        return State(self.x[row].copy(), self.u[row].copy(), self.X[row].copy(), self.U[row].copy(), int(self.step[row]))
+        J = self.material.shape[2] if self.material is not None else 0
+        xi = self.bstate[row, :2 * J].reshape(2, J, -1).copy() if J else None
+        return State(self.x[row].copy(), self.u[row].copy(), self.X[row].copy(), self.U[row].copy(), int(self.step[row]),
+                     xi)
 
 
 def _kernels(systems: list[System]) -> np.ndarray | None:
@@ -169,7 +195,8 @@ def gpu_refusal(batch: Batch) -> str | None:
 
     integrator = "adaptive" if batch.folds is not None else "fold" if np.any(batch.params[:, S.P_FOLD] > 0) else "fixed"
     drives = {"dead_weight" if kd == 0.0 else "spring" for kd in batch.params[:, S.P_KD]}
-    return next((w for w in (refusal(batch.geometry, integrator, d, "gpu") for d in sorted(drives)) if w), None)
+    return next((w for w in (refusal(batch.geometry, integrator, d, "gpu", batch.material_name)
+                             for d in sorted(drives)) if w), None)
 
 
 @dataclass

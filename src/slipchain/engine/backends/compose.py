@@ -51,9 +51,9 @@ import numba as nb
 import numpy as np
 
 from ...model.geometries import GEOMETRIES
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_ETAC,
+from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_ETAC,
                       P_FOLD, P_KD)
-from . import spectral
+from . import spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
 from .base import Batch, ChunkOutput
@@ -69,14 +69,15 @@ def fixed_stepper(explicit, commit, fastmath: bool):
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
     @nb.njit(cache=True, inline="always", **flags)
-    def step(p, Fr, k0, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc, un, Un,
-             dampx, dampX, rk, ra, uk, fk, ok, ysave):
+    def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
+             scratch):
+        un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave = scratch
         K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = rc
-        fsum = explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt, nstep * dt)
+        fsum = explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt, nstep * dt)
         _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, 1.0 / dt, p[P_FOLD] > 0.0)
         w_contact = _contact_sums(nc, fk, uk, ca, slow) * dt
-        w_damp = commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
-        return 1, fsum / xr.size, w_contact, w_damp, fsum * vd * dt
+        w_damp, w_visc = commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
+        return 1, fsum / xr.size, w_contact, w_damp, fsum * vd * dt, w_visc
 
     return step
 
@@ -87,8 +88,9 @@ def adaptive_stepper(explicit, commit):
     with a body."""
 
     @nb.njit(cache=True, inline="always")
-    def step(p, Fr, k0, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc, un, Un,
-             dampx, dampX, rk, ra, uk, fk, ok, ysave):
+    def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
+             scratch):
+        un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave = scratch
         K, KL, KT, Kd, m, meta, vd, fconst, dt0, _, _, _, c, _, slow = rc
         amp = p[P_AMP]
         etac = p[P_ETAC]
@@ -102,7 +104,7 @@ def adaptive_stepper(explicit, commit):
                 cr[CT_LOADED] = lv
             w = 1 << lv
             h = dt0 * w
-            fsum = explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, nstep * dt0)
+            fsum = explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, nstep * dt0)
             if lv > 0:  # keep the contacts' solver state: the step may be rejected
                 _copy_solver_state(nc, ys, ysave)
             _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m * (1.0 + h * etac), h * amp, c, 1.0 / h, True)
@@ -114,13 +116,13 @@ def adaptive_stepper(explicit, commit):
                 continue
             _keep_acceleration(n, ur, Ur, un, Un, ap, h)
             w_contact = _weighted_contact_sums(nc, fk, uk, ca, slow, w) * h
-            w_damp = commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+            w_damp, w_visc = commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
             ctrl[2] += 1.0
             if cr[CT_HAVE] > 0 and err < STEP_UP * tol and lv < top:
                 lv += 1
             cr[CT_LEVEL] = lv
             cr[CT_HAVE] = 1
-            return w, fsum / n * w, w_contact, w_damp, fsum * vd * h
+            return w, fsum / n * w, w_contact, w_damp, fsum * vd * h, w_visc
 
     return step
 
@@ -150,8 +152,8 @@ def kernel_driver(stepper):
     the kernel: the chains)."""
 
     @nb.njit(cache=True)
-    def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, n_samples, sample_steps,
-                out, acc, cacc, status):
+    def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
+                n_samples, sample_steps, out, acc, cacc, status):
         nb_rows, n = x.shape
         # :func:`scratch_arrays`' work arrays, allocated here (fresh allocations in view of the optimiser, likely why:
         # measured with benchmarks/bench_compose.py, through scratch_arrays the kernel is 4-5 % slower)
@@ -160,6 +162,8 @@ def kernel_driver(stepper):
         rk, ra, uk, fk = np.empty(cmax), np.empty(cmax), np.empty(cmax), np.empty(cmax)
         ok = np.empty(cmax, dtype=np.bool_)
         ysave = np.empty((N_YS_STATE, cmax))
+        scratch = (un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave)  # (a tuple: a call of more than 30 arguments
+        # compiles to CALL_FUNCTION_EX, which numba cannot inline)
         Fr = np.zeros(0)
         ctl = np.zeros((nb_rows, 4), dtype=np.int64)
         ap = np.zeros(2 * n)
@@ -169,10 +173,12 @@ def kernel_driver(stepper):
             p, xr, ur, Xr, Ur, st, vs = params[row], x[row], u[row], X[row], U[row], sites[row], vstar[row]
             nc = n_contacts[row]
             ys, fr, ctrl, cr, ca = ysolve[row], folds[row], control[row], ctl[row], cacc[row]
+            mt, br = material[row], bstate[row]
             rc = row_parameters(p)
             w_drive = 0.0
             w_damp = 0.0
             w_contact = 0.0
+            w_visc = 0.0
             for s in range(n_samples):
                 start_sample(row, n_contacts, ysolve, params, ctl)
                 fds = 0.0
@@ -180,12 +186,12 @@ def kernel_driver(stepper):
                 for _ in range(sample_steps):  # every step takes at least one base step (a counted loop: faster)
                     if j >= sample_steps:
                         break
-                    w, dfd, dwc, dwd, dwdr = stepper(p, Fr, 0.0, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j,
-                                                     steps[row], sample_steps, rc, un, Un, dampx, dampX, rk, ra, uk,
-                                                     fk, ok, ysave)
+                    w, dfd, dwc, dwd, dwdr, dwv = stepper(p, Fr, 0.0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr,
+                                                          ap, ca, j, steps[row], sample_steps, rc, scratch)
                     w_contact -= dwc
                     w_damp += dwd
                     w_drive += dwdr
+                    w_visc += dwv
                     fds += dfd
                     steps[row] += w
                     j += w
@@ -195,6 +201,7 @@ def kernel_driver(stepper):
             acc[row, A_WDRIVE] += w_drive
             acc[row, A_WDAMP] += w_damp
             acc[row, A_WCONTACT] += w_contact
+            acc[row, A_WVISC] += w_visc
 
     return advance
 
@@ -206,19 +213,20 @@ def rows_driver(stepper, fastmath: bool):
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
     @nb.njit(cache=True, **flags)
-    def step_rows(F, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, ctl, aprev,
-                  cacc, acc, fd, sample_steps, status, scratch):
-        un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave = scratch
+    def step_rows(F, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
+                  ctl, aprev, cacc, acc, fd, sample_steps, status, scratch):
         for row in range(x.shape[0]):
             if status[row] >= 0 or ctl[row, CT_J] >= sample_steps:
                 continue
-            w, dfd, dwc, dwd, dwdr = stepper(params[row], F[row], k0[row], x[row], u[row], X[row], U[row], sites[row],
-                                             vstar[row], n_contacts[row], ysolve[row], folds[row], control[row],
-                                             ctl[row], aprev[row], cacc[row], ctl[row, CT_J], steps[row], sample_steps,
-                                             row_parameters(params[row]), un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave)
+            w, dfd, dwc, dwd, dwdr, dwv = stepper(params[row], F[row], k0[row], material[row], bstate[row], x[row],
+                                                  u[row], X[row], U[row], sites[row], vstar[row], n_contacts[row],
+                                                  ysolve[row], folds[row], control[row], ctl[row], aprev[row],
+                                                  cacc[row], ctl[row, CT_J], steps[row], sample_steps,
+                                                  row_parameters(params[row]), scratch)
             acc[row, A_WCONTACT] -= dwc
             acc[row, A_WDAMP] += dwd
             acc[row, A_WDRIVE] += dwdr
+            acc[row, A_WVISC] += dwv
             fd[row] += dfd
             steps[row] += w
             ctl[row, CT_J] += w
@@ -251,8 +259,21 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
         spec *= neg
         return fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(b, n)
 
+    J = batch.material.shape[2] if batch.material is not None else 0
+    if J:  # material 'prony' (under the dead weight): the arms' force too, kept in work row 2J + 2 (.viscoelastic)
+        r = batch.material[:, 0, :]
+        neg2 = np.concatenate([neg, neg])
+
+        def force():  # noqa: F811 - the viscoelastic slab's
+            g = np.einsum("bj,bjn->bn", r, batch.bstate[:, :J])
+            spec = fft.rfft2(np.concatenate([batch.x - batch.X, g]).reshape(2 * b, lx, ly), axes=(1, 2))
+            spec *= neg2
+            both = fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(2 * b, n)
+            batch.bstate[:, 2 * J + 2] = both[b:]
+            return both[:b] + both[b:]
+
     adaptive, folds, control = _stepper_inputs(batch)
-    step_rows = loop(batch.geometry, adaptive)
+    step_rows = loop(batch.geometry, adaptive, batch.material_name)
     ctl = np.zeros((b, 4), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, cmax)
@@ -264,8 +285,8 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
             if adaptive and not np.any((batch.status < 0) & (ctl[:, CT_J] < sample_steps)):
                 break
             step_rows(force(), k0, batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites,
-                      batch.vstar, batch.n_contacts, batch.ysolve, folds, control, ctl, aprev, cacc, acc, fd,
-                      sample_steps, batch.status, scratch)
+                      batch.vstar, batch.n_contacts, batch.ysolve, folds, control, batch.bstate, batch.material, ctl,
+                      aprev, cacc, acc, fd, sample_steps, batch.status, scratch)
         spectral.end_sample(batch.x, batch.X, batch.status, batch.step, fd, out, s, sample_steps, acc)
     return ChunkOutput(out, acc, cacc)
 
@@ -275,9 +296,10 @@ def kernel_advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutp
     composed whole-chunk kernel (:func:`kernel_driver`)."""
     out, acc, cacc = _chunk_outputs(batch, n_samples)
     adaptive, folds, control = _stepper_inputs(batch)
-    loop(batch.geometry, adaptive)(batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites,
-                                   batch.vstar, batch.n_contacts, batch.ysolve, folds, control, n_samples,
-                                   sample_steps, out, acc, cacc, batch.status)
+    loop(batch.geometry, adaptive, batch.material_name)(
+        batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar, batch.n_contacts,
+        batch.ysolve, folds, control, batch.bstate, batch.material, n_samples, sample_steps, out, acc, cacc,
+        batch.status)
     return ChunkOutput(out, acc, cacc)
 
 
@@ -306,34 +328,41 @@ def _stepper_inputs(batch: Batch) -> tuple[bool, np.ndarray, np.ndarray]:
 
 
 LATTICE = (lattice_explicit, lattice_commit, False)  # chain, chain2d: (explicit, commit, fastmath of its fixed loop)
+LATTICE_PRONY = (viscoelastic.prony_explicit, viscoelastic.prony_commit, False)  # chain, chain2d, material 'prony'
 BODIES = {name: g.body for name, g in GEOMETRIES.items()}  # model.geometries
 
 
+SPECTRAL = spectral.BODY  # slab, halfspace
+SPECTRAL_PRONY = (viscoelastic.slab_prony_explicit, viscoelastic.slab_prony_commit, True)  # slab, dead weight, prony
+
+
 def _body(name: str):
-    return LATTICE if name == "lattice" else spectral.BODY
+    return {"lattice": LATTICE, "lattice-prony": LATTICE_PRONY, "spectral": SPECTRAL, "spectral-prony": SPECTRAL_PRONY}[name]
 
 
 @functools.cache
 def stepper(body: str, adaptive: bool):
     """The stepper of :func:`fixed_stepper` or :func:`adaptive_stepper` composed with a body
-    ('lattice' or 'spectral')."""
+    ('lattice', 'lattice-prony', 'spectral' or 'spectral-prony')."""
     explicit, commit, fastmath = _body(body)
     return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
 
 
-def loop(geometry: str, adaptive: bool):
+def loop(geometry: str, adaptive: bool, material: str = "elastic"):
     """The compiled loop of one combination: for the chains the whole-chunk kernel
     (:func:`kernel_driver`), for the slab and half-space the per-step function of its FFT driver
     (:func:`rows_driver`). One per body and stepper, shared by the geometries of a body; integrators
     'fixed' and 'fold' share the fixed stepper (the fold-aware contact solve is the row's P_FOLD);
-    the drive is the body's."""
-    return _loop(BODIES[geometry], adaptive)
+    the drive is the body's; ``material`` 'prony' the viscoelastic body of the chains or of the slab
+    under the dead weight (:mod:`.viscoelastic`)."""
+    body = BODIES[geometry] + ("-prony" if material == "prony" else "")
+    return _loop(body, adaptive)
 
 
 @functools.cache
 def _loop(body: str, adaptive: bool):
     step = stepper(body, adaptive)
-    return kernel_driver(step) if body == "lattice" else rows_driver(step, _body(body)[2] and not adaptive)
+    return kernel_driver(step) if body.startswith("lattice") else rows_driver(step, _body(body)[2] and not adaptive)
 
 
 __all__ = ["BODIES", "adaptive_stepper", "advance", "fft_advance", "fixed_stepper", "kernel_advance", "kernel_driver",

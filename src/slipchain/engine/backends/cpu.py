@@ -169,11 +169,11 @@ def _contact_sums(nc, fk, uk, ca, slow):
 
 
 @nb.njit(cache=True, inline="always")
-def lattice_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+def lattice_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
     """The chains' body, explicit part (:mod:`.compose`; scheme, steps 1-2) for one row with
     parameters ``p``, a step h at drive time t: :func:`_explicit_forces_2d` on the lattice of
     'chain2d', else :func:`_explicit_forces`; returns the sum of drive forces. (``Fr``, ``k0``:
-    nothing from outside the kernel.)"""
+    nothing from outside the kernel; ``mt``, ``br``: no internal variables, material 'elastic'.)"""
     m = p[P_M]
     drive = p[P_VD] * t
     if p[P_LAT] > 0.0:
@@ -184,9 +184,10 @@ def lattice_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
 
 
 @nb.njit(cache=True, inline="always")
-def lattice_commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
-    """The chains' body, commit (:mod:`.compose`; scheme, step 4): :func:`_move`."""
-    return _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+def lattice_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """The chains' body, commit (:mod:`.compose`; scheme, step 4): :func:`_move`; returns (the
+    damping work, 0: no bulk viscosity)."""
+    return _move(xr, ur, Xr, Ur, un, Un, dampx, dampX, h), 0.0
 
 
 @nb.njit(cache=True)

@@ -49,7 +49,7 @@ from ..scheme import A_WCONTACT, FASTMATH, O_FD, O_XMEAN, O_XUMEAN, P_FCONST, P_
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def body_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+def body_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
     """The slab's body, explicit part (:mod:`.compose`; module docstring, step 2) for one row with
     parameters ``p``, a step h at drive time t, given -IFFT[a**2 k FFT(x)] in ``Fr`` (spring drive:
     the drive, uniform, enters through k(0) = ``k0`` alone) or -IFFT[a**2 k_c FFT(x - X)] (dead
@@ -95,10 +95,11 @@ def body_explicit(p, Fr, k0, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def body_commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+def body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     """The slab's body, commit (:mod:`.compose`; module docstring, step 4): positions from the
     accepted velocities (blocks, and the plate with the dead weight); returns the damping work over
-    the step (the dampers act between block and plate, or block and drive)."""
+    the step (the dampers act between block and plate, or block and drive) and 0 (no bulk
+    viscosity: ``mt``, ``br`` are the material 'prony''s, unused here)."""
     wd = 0.0
     if p[P_KD] == 0.0:
         for i in range(xr.size):  # the work first, in a loop that writes nothing (see body_explicit)
@@ -108,13 +109,13 @@ def body_commit(p, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
             ur[i] = un[i]
             Xr[i] += h * Un[i]
             Ur[i] = Un[i]
-        return wd * h
+        return wd * h, 0.0
     for i in range(xr.size):
         wd += dampx[i] * un[i]
     for i in range(xr.size):
         xr[i] += h * un[i]
         ur[i] = un[i]
-    return wd * h
+    return wd * h, 0.0
 
 
 BODY = (body_explicit, body_commit, True)  # (explicit, commit, fastmath of its fixed loop): .compose

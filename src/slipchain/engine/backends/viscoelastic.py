@@ -1,0 +1,175 @@
+"""The chains' viscoelastic body (issue 28, ``material = "prony"``): the lattice body of
+:mod:`.cpu` plus the Maxwell arms of a Prony series (:mod:`slipchain.model.viscoelastic`).
+
+Per row, the material table ``mt`` (2, J) holds r_j = E_j / E_inf and tau_j (at the run's
+temperature), and the body state ``br`` (2 J + 4, n) the internal fields: rows 0 .. J-1 the
+interface layer's xi_j, rows J .. 2J-1 the upper layer's, then four work rows (the arms' combined
+field g = sum_j r_j xi_j of both layers and their force on every block, kept for the work).
+
+Explicit part (scheme, steps 1-2): the arms pull on every block with the bulk springs' stencil
+(K, K_L, K_T; on the 2-D lattice also K_Y, K_LY; never the drive springs K_d) applied to g, at the
+step's start as the springs do; the blocks' new velocities are the elastic body's plus
+h/m times that force. Commit (step 4): the arms' work over the step, then ``xi_j <- a_j xi_j + tau_j (1 - a_j) u'`` (exact for the
+displacement h u' linear over the step, :func:`slipchain.model.viscoelastic.exponential_weights`),
+then the elastic body's commit (positions). A rejected adaptive step changes nothing here (the
+commit alone writes the state). Sums are taken in loops that write nothing, as elsewhere
+(:func:`.spectral.body_explicit` says why).
+
+The arms' work is their force times the step's mean velocity (u + u')/2, the velocity with which
+the explicit step changes the kinetic energy exactly (m (u'^2 - u^2)/2 = h F (u + u')/2). Taken
+with u' alone, as the damping's is, it left a first-order residual in the energy balance that is
+large here (the default compound's arms dissipate a third of the drive's work; measured 2.7e-3,
+1.4e-3, 6.7e-4 of W_drive at 4e-8, 2e-8, 1e-8 s, beyond the tolerance on the adaptive step's
+larger levels). The arms' own dissipation, -W_bulk = -(their work + the change of their energy),
+is checked against the Prony formula for a sinusoidal motion (tests/physics/test_viscoelastic.py).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+
+from ..scheme import BODY_ROWS, FASTMATH, P_K, P_KL, P_KLY, P_KT, P_KY, P_LAT, P_LY, P_M, P_ML
+from .cpu import lattice_commit, lattice_explicit
+from .spectral import body_commit, body_explicit
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _combined(J, mt, br, gx, gX):
+    """g = sum_j r_j xi_j of both layers into gx, gX."""
+    n = gx.size
+    for i in range(n):
+        gx[i] = 0.0
+        gX[i] = 0.0
+    for j in range(J):
+        r = mt[0, j]
+        xj = br[j]
+        Xj = br[J + j]
+        for i in range(n):
+            gx[i] += r * xj[i]
+            gX[i] += r * Xj[i]
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def bulk_forces(ly, gx, gX, fx, fX, K, KL, KT, KY, KLY):
+    """The bulk springs' force on every block for displacement fields gx (interface layer), gX
+    (upper layer): the chains' stencil without drive, damping or dead weight (``ly`` = 1: the chain;
+    else the (Lx, Ly) lattice of 'chain2d', row-major)."""
+    n = gx.size
+    lx = n // ly
+    for ix in range(lx):
+        base = ix * ly
+        ipx = ((ix + 1) % lx) * ly
+        imx = ((ix + lx - 1) % lx) * ly
+        for iy in range(ly):
+            i = base + iy
+            jp = base + (iy + 1 if iy + 1 < ly else 0)
+            jm = base + (iy - 1 if iy > 0 else ly - 1)
+            t = KT * (gX[i] - gx[i])
+            fx[i] = K * (gx[ipx + iy] + gx[imx + iy] - 2.0 * gx[i]) + KY * (gx[jp] + gx[jm] - 2.0 * gx[i]) + t
+            fX[i] = KL * (gX[ipx + iy] + gX[imx + iy] - 2.0 * gX[i]) + KLY * (gX[jp] + gX[jm] - 2.0 * gX[i]) - t
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _kick(un, Un, fx, fX, dtm, dtmL):
+    for i in range(un.size):
+        un[i] += dtm * fx[i]
+        Un[i] += dtmL * fX[i]
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _arm_work(fx, fX, ur, Ur, un, Un):
+    """sum of the arms' force times the step's mean velocity (a loop that writes nothing)."""
+    w = 0.0
+    for i in range(un.size):
+        w += fx[i] * (ur[i] + un[i]) + fX[i] * (Ur[i] + Un[i])
+    return 0.5 * w
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _relax(J, mt, br, un, Un, h):
+    """xi_j <- a_j xi_j + tau_j (1 - a_j) u' for every term and layer."""
+    for j in range(J):
+        tau = mt[1, j]
+        a = math.exp(-h / tau)
+        c = -tau * math.expm1(-h / tau)
+        xj = br[j]
+        Xj = br[J + j]
+        for i in range(un.size):
+            xj[i] = a * xj[i] + c * un[i]
+            Xj[i] = a * Xj[i] + c * Un[i]
+
+
+@nb.njit(cache=True, inline="always")
+def prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+    """The viscoelastic chains' explicit part (module docstring); returns the drive force sum."""
+    J = mt.shape[1]
+    gx, gX, fx, fX = br[2 * J], br[2 * J + 1], br[2 * J + 2], br[2 * J + 3]
+    _combined(J, mt, br, gx, gX)
+    ly = int(p[P_LY]) if p[P_LAT] > 0.0 else 1
+    bulk_forces(ly, gx, gX, fx, fX, p[P_K], p[P_KL], p[P_KT], p[P_KY], p[P_KLY])
+    fsum = lattice_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t)
+    _kick(un, Un, fx, fX, h / p[P_M], h / p[P_ML])
+    return fsum
+
+
+@nb.njit(cache=True, inline="always")
+def prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """The viscoelastic chains' commit (module docstring); returns (damping work, the arms' work)."""
+    J = mt.shape[1]
+    w_visc = _arm_work(br[2 * J + 2], br[2 * J + 3], ur, Ur, un, Un) * h
+    _relax(J, mt, br, un, Un, h)
+    return lattice_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)[0], w_visc
+
+
+# The slab under the dead weight (issue 28): the whole kernel k_c(q) is the rubber's, linear in the
+# modulus for every q (the clamped top is the plate), so the arms' force is
+# -IFFT[a**2 k_c FFT(sum_j r_j xi_j)] with xi_j the arms' fields of the blocks' displacement relative
+# to the plate (rows 0 .. J-1 of the body state; rows J .. 2J-1 unused). The FFT driver
+# (:func:`.compose.fft_advance`) adds it to the elastic force it hands the body and keeps it in the
+# work row 2J + 2; the plate feels its reaction through the force's mean, as the elastic one's.
+# The radiation damping stays at the relaxed modulus (c_s from E_inf), as the drive springs do in
+# the chains.
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def slab_prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+    """The viscoelastic slab's explicit part: the elastic slab's with the arms' force already in ``Fr``."""
+    return body_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t)
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _slab_arm_work(fa, ur, Ur, un, Un):
+    """sum of the arms' force times the step's mean velocity relative to the plate (which takes the
+    reaction): a loop that writes nothing."""
+    w = 0.0
+    for i in range(un.size):
+        w += fa[i] * ((ur[i] + un[i]) - (Ur[i] + Un[i]))
+    return 0.5 * w
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _slab_relax(J, mt, br, un, Un, h):
+    """xi_j <- a_j xi_j + tau_j (1 - a_j) (u' - U') for every term."""
+    for j in range(J):
+        tau = mt[1, j]
+        a = math.exp(-h / tau)
+        c = -tau * math.expm1(-h / tau)
+        xj = br[j]
+        for i in range(un.size):
+            xj[i] = a * xj[i] + c * (un[i] - Un[i])
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def slab_prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """The viscoelastic slab's commit: the arms' work, their update, then the elastic slab's commit;
+    returns (damping work, the arms' work)."""
+    J = mt.shape[1]
+    w_visc = _slab_arm_work(br[2 * J + 2], ur, Ur, un, Un) * h
+    _slab_relax(J, mt, br, un, Un, h)
+    return body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)[0], w_visc
+
+
+__all__ = ["BODY_ROWS", "bulk_forces", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
+
