@@ -91,6 +91,9 @@ def _step_text(cfg) -> str:
     if cfg.integrator == "adaptive":
         return (f"integrator = adaptive from dt = {cfg.dt:g} s (steps up to {cfg.dt * 2**cfg.step_levels:g} s, "
                 f"step_tol = {cfg.step_tol:g})")
+    if cfg.integrator == "implicit":
+        return (f"integrator = implicit from dt = {cfg.dt:g} s (explicit steps up to {cfg.dt * 2**cfg.step_levels:g} s, "
+                f"backward Euler above, step_tol = {cfg.step_tol:g})")
     return f"integrator = {cfg.integrator}, dt = {cfg.dt:g} s"
 
 

@@ -71,7 +71,7 @@ def estimate_bytes(cfg: Config, t: float | None = None) -> int:
     n_c = cfg.n_contacts
     per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if geometry_of(cfg).spectral else 0)
     per_contact = BYTES_PER_CONTACT
-    if cfg.integrator == "adaptive":  # the previous accelerations of both layers; each level's folds, the saved solver state
+    if cfg.integrator in ("adaptive", "implicit"):  # the previous accelerations of both layers; each level's folds, the saved solver state
         per_block += 16
         per_contact += 16 * (cfg.step_levels + 1) + 24
     return int(cfg.n_blocks * per_block + n_c * (per_contact + S.N_CACC * 8 * chunks) + samples * BYTES_PER_SAMPLE)

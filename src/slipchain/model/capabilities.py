@@ -19,7 +19,7 @@ import itertools
 from .geometries import GEOMETRIES as _GEOMETRIES
 
 GEOMETRIES = tuple(_GEOMETRIES)
-INTEGRATORS = ("fixed", "fold", "adaptive")
+INTEGRATORS = ("fixed", "fold", "adaptive", "implicit")
 MATERIALS = ("elastic", "prony")
 DRIVES = ("spring", "dead_weight")
 BACKENDS = ("cpu", "gpu")
@@ -46,6 +46,13 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
                     "compound the adaptive step starts slip events 10-15 us early at every tolerance, though it "
                     "agrees with the fixed step to 8e-4 before them: docs/guide/viscoelastic.md; give "
                     "integrator = 'fold')")
+    if integrator == "implicit":
+        if geometry != "chain":
+            return (f"integrator = 'implicit' runs on the chain only in this version (its backward Euler solves the "
+                    f"chain's cyclic banded system; geometry = '{geometry}': use integrator = 'adaptive')")
+        if material != "elastic":
+            return ("integrator = 'implicit' runs with material = 'elastic' only in this version (the Maxwell arms are "
+                    "not in its implicit system; use integrator = 'fold')")
     if backend == "cpu":
         return None
     if integrator != "fixed":

@@ -87,6 +87,7 @@ _NOT_OFF = object()
 # The adaptive step's largest step stays below this fraction of the stable step (Config.dt_stable).
 STABLE_FRACTION = 0.9
 DEFAULT_DT_LEVELS = 2  # dt absent: the base step lies at least 2**2 below the adaptive step's ceiling
+MAX_IMPLICIT_LEVELS = 24  # integrator = 'implicit': dt ... dt 2**24 (1.7 s at 1e-7 s), within a sample
 MAX_STEP_LEVELS = 6  # integrator = 'adaptive': the step doubles at most this often (dt ... 64 dt)
 # t_max_cycles absent: the automatic length of a run that stick-slips as a whole may follow its slip
 # cycles up to this many seconds (the cap of presets/fig6-eps1.toml, 20 cycles of 1.1 s at epsilon = 1,
@@ -159,7 +160,7 @@ class Config(BaseModel):
     dead_weight: float | None = Field(None, gt=0)
     geometry: Literal["chain", "chain2d", "slab", "halfspace"] = "chain"
     Ly: int = Field(1, ge=1)
-    integrator: Literal["fixed", "fold", "adaptive"] = "adaptive"
+    integrator: Literal["fixed", "fold", "adaptive", "implicit"] = "adaptive"
     step_tol: float = Field(0.01, gt=0)
     min_cycles: int = Field(0, ge=0)
 
@@ -250,9 +251,9 @@ class Config(BaseModel):
             if not self.t_ramp < end:
                 raise ValueError(_message("t_ramp", self.t_ramp, f"shorter than {name} = {end:g} (the velocity is "
                                           "measured after the ramp)"))
-        if self.integrator != "adaptive" and self.step_tol != OFF["step_tol"]:
-            raise ValueError(_message("step_tol", self.step_tol, "absent unless integrator = 'adaptive' (it is the "
-                                      "adaptive step's tolerance)"))
+        if self.integrator not in ("adaptive", "implicit") and self.step_tol != OFF["step_tol"]:
+            raise ValueError(_message("step_tol", self.step_tol, "absent unless integrator = 'adaptive' or 'implicit' "
+                                      "(it is the adaptive step's tolerance)"))
         if self.t_max_cycles and (self.t_total is not None or self.dead_weight is not None
                                   or not self.t_max_cycles > self.t_max):
             raise ValueError(_message("t_max_cycles", self.t_max_cycles, f"more than t_max = {self.t_max:g}, and 0 "
@@ -262,7 +263,7 @@ class Config(BaseModel):
             raise ValueError(_message("min_cycles", self.min_cycles, "0 (absent) with t_total or dead_weight: it is a "
                                       "condition of the spring drive's automatic run length"))
         self._check_stable_step()
-        if self.integrator in ("fold", "adaptive"):
+        if self.integrator in ("fold", "adaptive", "implicit"):
             return self
         dt_max = self.dt_unique_root_limit
         if self.dt >= dt_max:
@@ -363,6 +364,13 @@ class Config(BaseModel):
         while k < MAX_STEP_LEVELS and self.dt * 2.0 ** (k + 1) <= top:
             k += 1
         return k
+
+    @property
+    def implicit_levels(self) -> int:
+        """integrator = 'implicit' (issue 27): how often the step may double, dt * 2**k, above
+        :attr:`step_levels` by backward Euler (:mod:`slipchain.engine.backends.implicit`), which
+        has no stability bound: MAX_IMPLICIT_LEVELS, the output samples bounding each step too."""
+        return max(self.step_levels, MAX_IMPLICIT_LEVELS)
 
     def _check_stable_step(self) -> None:
         """dt below :attr:`dt_stable` (every geometry and integrator: the explicit part is the same)."""

@@ -26,8 +26,10 @@ class Batch:
     ``geometry`` and ``shape`` = (Lx, Ly) are the batch's (all rows share them); ``kernel`` holds
     a**2 k(q) on the rfft2 grid of each row, (B, Lx, Ly//2 + 1), for 'slab' and 'halfspace'.
     With integrator = 'adaptive' (all rows or none), ``folds`` (B, levels + 1, 2, C) holds each
-    contact's folds at dt * 2**k and ``step_control`` (B, 4) the tolerance in m/s (step_tol*v_d),
-    the number of doublings and counts of the steps taken and rejected (:mod:`.adaptive`).
+    contact's folds at dt * 2**k and ``step_control`` (B, 6) the tolerance in m/s (step_tol*v_d),
+    the number of doublings, counts of the steps taken and rejected (:mod:`.adaptive`), the implicit
+    stepper's top level (integrator = 'implicit'; the number of doublings otherwise) and the last
+    step's error estimate (:mod:`.compose`).
     """
 
     x: np.ndarray
@@ -50,6 +52,12 @@ class Batch:
     material: np.ndarray | None = None  # (B, 2, J): r_j and tau_j of each row's Prony series
 
     @property
+    def implicit(self) -> bool:
+        """integrator = 'implicit' (issue 27): the adaptive step's levels and backward Euler above them
+        (the implicit top level, ``step_control`` column 4, above the adaptive top, column 1)."""
+        return self.step_control is not None and bool(np.any(self.step_control[:, 4] > self.step_control[:, 1]))
+
+    @property
     def material_name(self) -> str:
         """'prony' where the rows carry a Prony series, else 'elastic'."""
         return "prony" if self.material is not None and self.material.shape[2] > 0 else "elastic"
@@ -59,9 +67,9 @@ class Batch:
         c0 = systems[0].config
         if any((s.config.N, s.config.Ly, s.config.geometry) != (c0.N, c0.Ly, c0.geometry) for s in systems):
             raise ValueError("all realisations of a batch must have the same N, Ly and geometry")
-        adaptive = c0.integrator == "adaptive"
-        if any((s.config.integrator == "adaptive") != adaptive for s in systems):
-            raise ValueError("a batch runs integrator = 'adaptive' in all its rows or in none")
+        adaptive = c0.integrator in ("adaptive", "implicit")  # the implicit stepper is the adaptive one with more levels
+        if adaptive and {s.config.integrator for s in systems} != {c0.integrator}:
+            raise ValueError("a batch runs integrator = 'adaptive' or 'implicit' in all its rows or in none")
         n_terms = {len(s.config.prony_E or ()) for s in systems}
         if len(n_terms) > 1 or {s.config.material for s in systems} != {c0.material}:
             raise ValueError("a batch needs one material and as many Prony terms in every row")
@@ -74,7 +82,7 @@ class Batch:
         ysolve = np.zeros((b, S.N_YS, cmax))
         levels = max(s.config.step_levels for s in systems) if adaptive else 0
         folds = np.zeros((b, levels + 1, 2, cmax)) if adaptive else None
-        step_control = np.zeros((b, 4)) if adaptive else None
+        step_control = np.zeros((b, 6)) if adaptive else None
         for r, s in enumerate(systems):
             params[r] = kernel_params(s)
             c = s.n_contacts
@@ -94,7 +102,8 @@ class Batch:
                     cf.m * (1.0 + cf.dt * cf.eta_c) * s.vstar, cf.dt * cf.epsilon * cf.f0, cf.c)
             if adaptive:
                 cf = s.config
-                step_control[r] = cf.step_tol * cf.v_d, cf.step_levels, 0.0, 0.0
+                top = cf.implicit_levels if cf.integrator == "implicit" else cf.step_levels
+                step_control[r] = cf.step_tol * cf.v_d, cf.step_levels, 0.0, 0.0, top, 0.0
                 folds[r, :, 0], folds[r, :, 1] = np.inf, -np.inf
                 for k in range(cf.step_levels + 1):
                     h = cf.dt * 2.0**k
@@ -193,7 +202,7 @@ def gpu_refusal(batch: Batch) -> str | None:
     drives (:func:`slipchain.model.capabilities.refusal`), or None."""
     from ...model.capabilities import refusal
 
-    integrator = "adaptive" if batch.folds is not None else "fold" if np.any(batch.params[:, S.P_FOLD] > 0) else "fixed"
+    integrator = ("implicit" if batch.implicit else "adaptive") if batch.folds is not None else "fold" if np.any(batch.params[:, S.P_FOLD] > 0) else "fixed"
     drives = {"dead_weight" if kd == 0.0 else "spring" for kd in batch.params[:, S.P_KD]}
     return next((w for w in (refusal(batch.geometry, integrator, d, "gpu", batch.material_name)
                              for d in sorted(drives)) if w), None)

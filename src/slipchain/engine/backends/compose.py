@@ -52,8 +52,8 @@ import numpy as np
 
 from ...model.geometries import GEOMETRIES
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_ETAC,
-                      P_FOLD, P_KD)
-from . import spectral, viscoelastic
+                      P_FOLD, P_KD, P_M, P_VD)
+from . import implicit, spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
 from .base import Batch, ChunkOutput
@@ -61,6 +61,10 @@ from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice
 
 # ctl columns: the row's place in its output sample
 CT_J, CT_LEVEL, CT_LOADED, CT_HAVE = range(4)
+# control columns (Batch.step_control): tolerance (m/s), the adaptive step's top level, steps accepted, rejected,
+# the implicit stepper's top level (:mod:`.implicit`), the last accepted step's error estimate
+CTRL_TOP_IMPLICIT, CTRL_ERR = 4, 5
+N_CONTROL = 6
 
 
 def fixed_stepper(explicit, commit, fastmath: bool):
@@ -118,11 +122,70 @@ def adaptive_stepper(explicit, commit):
             w_contact = _weighted_contact_sums(nc, fk, uk, ca, slow, w) * h
             w_damp, w_visc = commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
             ctrl[2] += 1.0
+            ctrl[CTRL_ERR] = err
             if cr[CT_HAVE] > 0 and err < STEP_UP * tol and lv < top:
                 lv += 1
             cr[CT_LEVEL] = lv
             cr[CT_HAVE] = 1
             return w, fsum / n * w, w_contact, w_damp, fsum * vd * h, w_visc
+
+    return step
+
+
+def implicit_stepper(explicit, commit):
+    """integrator = 'implicit' (issue 27, :mod:`.implicit`): the adaptive step up to its top level
+    (``control[1]``, the explicit springs' stable step), backward Euler with everything implicit on
+    the levels above it (up to ``control[4]``) while every contact is on the rising branch of eq. (1).
+    Composed with the chain's body (its explicit part and commit serve the adaptive levels)."""
+    astep = adaptive_stepper(explicit, commit)
+
+    @nb.njit(cache=True, inline="always")
+    def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
+             scratch):
+        un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave = scratch
+        dt0 = rc[8]
+        slow = rc[14]
+        tol = ctrl[0]
+        top_explicit = int(ctrl[1])
+        top = int(ctrl[CTRL_TOP_IMPLICIT])
+        n = xr.size
+        while True:
+            lv = _grid_level(cr[CT_LEVEL], j, sample_steps)
+            if lv <= top_explicit:
+                was = cr[CT_LEVEL]
+                res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
+                            sample_steps, rc, scratch)
+                # at the explicit top with a small error: the next step may be implicit
+                if (top > top_explicit and was >= top_explicit and cr[CT_LEVEL] == top_explicit
+                        and ctrl[CTRL_ERR] < STEP_UP * tol and implicit.rising(nc, ys)):
+                    cr[CT_LEVEL] = top_explicit + 1
+                return res
+            w = 1 << lv
+            h = dt0 * w
+            t1 = (nstep + w) * dt0
+            its = implicit.be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, ra, rk, ap, cr[CT_HAVE] > 0)
+            err = 0.0
+            if its > 0 and cr[CT_HAVE] > 0:
+                err = _error(n, ur, Ur, un, Un, ap, h)
+            if its < 0 or err > tol:  # rejected: finer (down to the explicit top, the adaptive step's levels)
+                ctrl[3] += 1.0
+                cr[CT_LEVEL] = top_explicit if its < 0 else max(_rejected_level(lv, err, tol), top_explicit)
+                if its >= 0 and cr[CT_LEVEL] == lv:
+                    cr[CT_LEVEL] = lv - 1
+                continue
+            _keep_acceleration(n, ur, Ur, un, Un, ap, h)
+            implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
+            w_contact = _weighted_contact_sums(nc, fk, uk, ca, slow, w) * h
+            implicit.chain_damping(p, un, Un, dampx, dampX)
+            w_damp, w_visc = commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+            fsum = implicit.drive_force_sum(p, Xr, t1)
+            ctrl[2] += 1.0
+            ctrl[CTRL_ERR] = err
+            if cr[CT_HAVE] > 0 and err < STEP_UP * tol and lv < top:
+                lv += 1
+            cr[CT_LEVEL] = lv
+            cr[CT_HAVE] = 1
+            return w, fsum / n * w, w_contact, w_damp, fsum * p[P_VD] * h, w_visc
 
     return step
 
@@ -273,7 +336,7 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
             return both[:b] + both[b:]
 
     adaptive, folds, control = _stepper_inputs(batch)
-    step_rows = loop(batch.geometry, adaptive, batch.material_name)
+    step_rows = loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name)
     ctl = np.zeros((b, 4), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, cmax)
@@ -296,7 +359,7 @@ def kernel_advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutp
     composed whole-chunk kernel (:func:`kernel_driver`)."""
     out, acc, cacc = _chunk_outputs(batch, n_samples)
     adaptive, folds, control = _stepper_inputs(batch)
-    loop(batch.geometry, adaptive, batch.material_name)(
+    loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name)(
         batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar, batch.n_contacts,
         batch.ysolve, folds, control, batch.bstate, batch.material, n_samples, sample_steps, out, acc, cacc,
         batch.status)
@@ -323,7 +386,7 @@ def _stepper_inputs(batch: Batch) -> tuple[bool, np.ndarray, np.ndarray]:
     if batch.folds is not None:
         return True, batch.folds, batch.step_control
     b, cmax = batch.sites.shape
-    return False, np.zeros((b, 1, 2, cmax)), np.zeros((b, 4))
+    return False, np.zeros((b, 1, 2, cmax)), np.zeros((b, N_CONTROL))
 
 
 
@@ -341,14 +404,17 @@ def _body(name: str):
 
 
 @functools.cache
-def stepper(body: str, adaptive: bool):
-    """The stepper of :func:`fixed_stepper` or :func:`adaptive_stepper` composed with a body
-    ('lattice', 'lattice-prony', 'spectral' or 'spectral-prony')."""
+def stepper(body: str, adaptive: bool | str):
+    """The stepper of :func:`fixed_stepper`, :func:`adaptive_stepper` (``adaptive`` True) or
+    :func:`implicit_stepper` (``adaptive`` = 'implicit') composed with a body ('lattice',
+    'lattice-prony', 'spectral' or 'spectral-prony')."""
     explicit, commit, fastmath = _body(body)
+    if adaptive == "implicit":
+        return implicit_stepper(explicit, commit)
     return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
 
 
-def loop(geometry: str, adaptive: bool, material: str = "elastic"):
+def loop(geometry: str, adaptive: bool | str, material: str = "elastic"):
     """The compiled loop of one combination: for the chains the whole-chunk kernel
     (:func:`kernel_driver`), for the slab and half-space the per-step function of its FFT driver
     (:func:`rows_driver`). One per body and stepper, shared by the geometries of a body; integrators
@@ -360,7 +426,7 @@ def loop(geometry: str, adaptive: bool, material: str = "elastic"):
 
 
 @functools.cache
-def _loop(body: str, adaptive: bool):
+def _loop(body: str, adaptive: bool | str):
     step = stepper(body, adaptive)
     return kernel_driver(step) if body.startswith("lattice") else rows_driver(step, _body(body)[2] and not adaptive)
 

@@ -1,0 +1,316 @@
+"""integrator = 'implicit' (issue 27): backward Euler through stick and creep, the adaptive step's
+explicit fold scheme through slip events.
+
+At the physical contact stiffness (epsilon = 1) a slip cycle is ~0.1 ms of slip and ~1 s of
+creep, in which every contact sits on the rising branch of eq. (1) and the blocks barely move
+(docs/model.md, numerical facts). The explicit springs cap every step of the adaptive stepper at
+the stable step (~6.9e-7 s): over a million steps per cycle in which nothing happens. This
+stepper (:func:`.compose.implicit_stepper`) is the adaptive stepper with more levels: up to the
+explicit top (``Config.step_levels``) it *is* the adaptive step (same code, same results); above it
+a step of h = dt 2**k is taken by **backward Euler with everything implicit** -- springs, pair
+damping, drive and every contact -- whose step is bounded by accuracy alone:
+
+    M (v' - v) = h [ -K (q + h v') - C v' + g(t + h) - f(v') ],      q' = q + h v'
+
+(q = (x, X), v = (u, U); K the springs K, K_L, K_T, K_d; C the pair damping m*eta; g the drive
+K_d v_d t or the dead weight F_b; f eq. (1), the paper's contact force with its damping m eta_c u,
+on the contact blocks). The velocities v' solve ``A v' + h f(v') = M v + h (g - K q)``,
+A = M + h C + h**2 K, by Newton's method: per iteration one solve with the Jacobian A + h
+diag(f'), a cyclic block-tridiagonal matrix (2 x 2 blocks, one per (x_i, X_i) pair) solved in O(N)
+by :func:`solve_cyclic` (block Thomas elimination with a rank-2 Sherman-Morrison-Woodbury
+correction for the periodic corner; compiled into the loop, so no per-step Python: scipy's banded
+solvers cannot be called from it; tests/engine/test_implicit.py checks it against
+``scipy.linalg.solve``). Each contact's velocity is updated as the fold scheme's scalar solver does,
+in y = log10(|u|/v*) (the law is smooth in y, not in u), at most MAX_DY decades per iteration.
+
+**Where it may be taken.** Backward Euler is taken only while every contact stays on the rising
+branch of eq. (1) with a margin, y < Y_MAX (there f' > 0, so the Jacobian is symmetric positive
+definite and each contact has one root: no folds), and converges within NEWTON_MAX iterations. A
+step that leaves the rising branch, or whose error estimate exceeds the tolerance, is rejected,
+and the level falls (to the explicit top at most, where the adaptive step with its fold-aware
+contacts resolves the slip event on fine steps). The level rises above the explicit top after an
+accepted step whose error is below STEP_UP * tol while every contact is on the rising branch.
+
+**Error and stability.** The error estimate is the adaptive step's (h/2 max |a^n - a^(n-1)|,
+:func:`.adaptive._error`), so ``step_tol`` means the same for both. Backward Euler is L-stable for
+the linear part (every mode, springs and damping together, decays for every h: the amplification of
+a mode with frequency omega and damping rate gamma is 1/(1 + h gamma + h**2 omega**2) in modulus
+below 1; :func:`slipchain.model.stability.be_amplification`), so its steps are bounded by accuracy
+alone; rejection is the accuracy control, not a stability mechanism. Its numerical dissipation per
+step, 1/2 (dv^T M dv + dq^T K dq), is not a work term: the energy balance holds to O(h) as for the
+explicit step (measured in tests/physics/test_implicit.py).
+
+Geometry: the chain (1-D) with material 'elastic', either drive, in this version.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .cpu import scaled_exp
+from ..scheme import FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KT, P_M, P_META, P_ML, P_VD, Y_LOG, Y_P, Y_Q
+
+Y_MAX = -0.01  # backward Euler only while every contact has log10(|u|/v*) below this (the rising branch, with margin)
+Y_ABORT = -0.001  # an iterate beyond this gives up at once (f' > 0 up to y = 0: the Jacobian stays positive definite)
+NEWTON_MAX = 25
+NEWTON_DY = 1e-6  # converged: every contact's last update below this (decades; the error left ~ its square) ...
+NEWTON_DV = 1e-4  # ... and every other block's below this times the tolerance (m/s)
+MAX_DY = 2.0  # largest change of a contact's y in one Newton iteration (decades)
+Y_FLOOR = -40.0  # y of a contact whose velocity the update puts at exactly zero
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def solve_cyclic(a, bb, d, ox, oX, r, z):
+    """Solve J z = r for the cyclic block-tridiagonal symmetric J of the implicit chain.
+
+    Block i (2 x 2, unknowns (u_i, U_i)) is [[a[i], bb], [bb, d]]; blocks i and i+1 (and N-1 and 0,
+    the periodic corner) are coupled by diag(ox, oX). ``r`` and ``z`` have length 2N, interleaved
+    (u_0, U_0, u_1, U_1, ...). Block Thomas elimination without pivoting (J is positive definite
+    wherever it is used) on the matrix with the corner removed and the first and last diagonal
+    blocks modified, then a rank-2 Sherman-Morrison-Woodbury correction for the corner (the
+    block form of Numerical Recipes' ``cyclic``, gamma = -diagonal of block 0)."""
+    n = a.size
+    g0 = -a[0]
+    g1 = -d
+    # modified diagonal blocks: B_0 = D_0 - G, B_{n-1} = D_{n-1} - E G^-1 E (E = diag(ox, oX))
+    pa = np.empty(n)  # inverse of the eliminated block i: [[pa, pb], [pb, pd]]
+    pb = np.empty(n)
+    pd = np.empty(n)
+    for i in range(n):
+        ai = a[i]
+        di = d
+        if i == 0:
+            ai -= g0
+            di -= g1
+        if i == n - 1:
+            ai -= ox * ox / g0
+            di -= oX * oX / g1
+        if i > 0:  # B_i - O P_{i-1}^-1 O, O = diag(ox, oX)
+            ai -= ox * ox * pa[i - 1]
+            di -= oX * oX * pd[i - 1]
+            bi = bb - ox * oX * pb[i - 1]
+        else:
+            bi = bb
+        inv = 1.0 / (ai * di - bi * bi)
+        pa[i] = di * inv
+        pb[i] = -bi * inv
+        pd[i] = ai * inv
+    rhs = np.empty((2 * n, 3))  # r and the two columns of U, swept together (three independent recurrences)
+    rhs[:, 0] = r
+    rhs[:, 1:] = 0.0
+    rhs[0, 1] = g0
+    rhs[2 * n - 2, 1] = ox
+    rhs[1, 2] = g1
+    rhs[2 * n - 1, 2] = oX
+    for i in range(1, n):  # forward: y_i = r_i - O P_{i-1}^-1 y_{i-1}
+        qa, qb, qd = ox * pa[i - 1], ox * pb[i - 1], oX * pb[i - 1]
+        qe = oX * pd[i - 1]
+        for c in range(3):
+            y0 = rhs[2 * i - 2, c]
+            y1 = rhs[2 * i - 1, c]
+            rhs[2 * i, c] -= qa * y0 + qb * y1
+            rhs[2 * i + 1, c] -= qd * y0 + qe * y1
+    i = n - 1
+    for c in range(3):
+        y0 = rhs[2 * i, c]
+        y1 = rhs[2 * i + 1, c]
+        rhs[2 * i, c] = pa[i] * y0 + pb[i] * y1
+        rhs[2 * i + 1, c] = pb[i] * y0 + pd[i] * y1
+    for i in range(n - 2, -1, -1):  # back: z_i = P_i^-1 (y_i - O z_{i+1})
+        for c in range(3):
+            y0 = rhs[2 * i, c] - ox * rhs[2 * i + 2, c]
+            y1 = rhs[2 * i + 1, c] - oX * rhs[2 * i + 3, c]
+            rhs[2 * i, c] = pa[i] * y0 + pb[i] * y1
+            rhs[2 * i + 1, c] = pb[i] * y0 + pd[i] * y1
+    # Woodbury: z = y - Z (I + V^T Z)^-1 V^T y, V^T w = w_0 + G^-1 E w_{n-1}
+    e0 = ox / g0
+    e1 = oX / g1
+    vy0 = rhs[0, 0] + e0 * rhs[2 * n - 2, 0]
+    vy1 = rhs[1, 0] + e1 * rhs[2 * n - 1, 0]
+    m00 = 1.0 + rhs[0, 1] + e0 * rhs[2 * n - 2, 1]
+    m10 = rhs[1, 1] + e1 * rhs[2 * n - 1, 1]
+    m01 = rhs[0, 2] + e0 * rhs[2 * n - 2, 2]
+    m11 = 1.0 + rhs[1, 2] + e1 * rhs[2 * n - 1, 2]
+    det = m00 * m11 - m01 * m10
+    c0 = (m11 * vy0 - m01 * vy1) / det
+    c1 = (m00 * vy1 - m10 * vy0) / det
+    for k in range(2 * n):
+        z[k] = rhs[k, 0] - rhs[k, 1] * c0 - rhs[k, 2] * c1
+
+
+@nb.njit(cache=True)
+def chain_coefficients(p, h):
+    """The constant entries of A = M + h C + h**2 K for the chain (module docstring): (a0, bb, d0,
+    ox, oX) -- block diagonal (IL, IL-UL, UL) and the couplings of neighbours (IL, UL)."""
+    m = p[P_M]
+    meta = p[P_META]
+    K, KL, KT, Kd = p[P_K], p[P_KL], p[P_KT], p[P_KD]
+    h2 = h * h
+    a0 = m + h2 * (2.0 * K + KT) + 3.0 * h * meta
+    bb = -(h2 * KT + h * meta)
+    d0 = p[P_ML] + h2 * (2.0 * KL + KT + Kd) + 3.0 * h * meta
+    return a0, bb, d0, -(h2 * K + h * meta), -(h2 * KL + h * meta)
+
+
+@nb.njit(cache=True)
+def _contact_force(s, y, vstar, amp, c, meta_c):
+    """(u, f, df/du) of a contact with sign s and y = log10(|u|/v*): eq. (1) with its damping m eta_c u."""
+    pw = math.exp(LN10 * y)
+    u = s * vstar * pw
+    big = amp * math.exp(-c * y * y)
+    return u, s * big + meta_c * u, meta_c + big * (-2.0 * c * y) / (LN10 * vstar * pw)
+
+
+@nb.njit(cache=True)
+def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
+    """One backward-Euler step of the chain from (x, u, X, U) at time t1 - h: writes the new
+    velocities into ``un``, ``Un`` and each contact's (y, sign) into ``yk``, ``sk``, touching
+    nothing else. Newton starts from the velocities extrapolated with the last step's accelerations
+    ``ap`` (where ``have``; a contact keeps its y where the extrapolation would change its sign).
+    Returns the Newton iterations taken, or -1 where the step may not be taken by backward Euler (a
+    contact off the rising branch, or no convergence)."""
+    n = xr.size
+    m = p[P_M]
+    K, KL, KT, Kd = p[P_K], p[P_KL], p[P_KT], p[P_KD]
+    a0, bb, d0, ox, oX = chain_coefficients(p, h)
+    amp = p[P_AMP]
+    c = p[P_C]
+    meta_c = m * p[P_ETAC]
+    drive = p[P_VD] * t1
+    fconst = p[P_FCONST]
+    mL = p[P_ML]
+    rhs = np.empty(2 * n)
+    for i in range(n):  # M v + h (g - K q) at the step's start
+        ip = i + 1 if i + 1 < n else 0
+        im = i - 1 if i > 0 else n - 1
+        fx = K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i])
+        fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + fconst
+        rhs[2 * i] = m * ur[i] + h * fx
+        rhs[2 * i + 1] = mL * Ur[i] + h * fX
+        un[i] = ur[i] + h * ap[i] if have else ur[i]
+        Un[i] = Ur[i] + h * ap[n + i] if have else Ur[i]
+    for k in range(nc):
+        u0 = ur[st[k]]
+        sk[k] = 1.0 if u0 >= 0.0 else -1.0
+        yk[k] = ys[Y_LOG, k]
+        if not yk[k] < Y_MAX:
+            return -1
+        ug = un[st[k]]
+        if ug * sk[k] > 0.0:
+            yk[k] = min(math.log10(abs(ug) / vs[k]), Y_MAX)
+    diag = np.empty(n)
+    res = np.empty(2 * n)
+    dv = np.empty(2 * n)
+    hf = np.zeros(n)  # h f(u) on the contact blocks
+    free = np.ones(n, dtype=np.bool_)  # blocks without a contact
+    pk = np.empty(nc)  # 10**y and exp(-c y**2) of each contact, updated multiplicatively (as newton_pass)
+    qk = np.empty(nc)
+    for k in range(nc):
+        free[st[k]] = False
+        pk[k] = math.exp(LN10 * yk[k])
+        qk[k] = math.exp(-c * yk[k] * yk[k])
+    for it in range(NEWTON_MAX):
+        for i in range(n):
+            diag[i] = a0
+        for k in range(nc):
+            i = st[k]
+            u = sk[k] * vs[k] * pk[k]
+            big = amp * qk[k]
+            un[i] = u
+            hf[i] = h * (sk[k] * big + meta_c * u)
+            diag[i] = a0 + h * (meta_c + big * (-2.0 * c * yk[k]) / (LN10 * vs[k] * pk[k]))
+        _residual(n, a0, bb, d0, ox, oX, un, Un, hf, rhs, res)
+        solve_cyclic(diag, bb, d0, ox, oX, res, dv)
+        big_v = 0.0
+        for i in range(n):
+            big_v = max(big_v, abs(dv[2 * i + 1]), abs(dv[2 * i]) if free[i] else 0.0)
+            un[i] += dv[2 * i]  # contact blocks: overwritten from (y, s) below
+            Un[i] += dv[2 * i + 1]
+        big_y = 0.0
+        for k in range(nc):
+            u = sk[k] * vs[k] * pk[k]
+            du = dv[2 * st[k]]
+            if (u + du) * sk[k] <= 0.0:  # the update crosses zero: the new sign, additively
+                sk[k] = -sk[k]
+                w = abs(u + du)
+                yk[k] = max(math.log10(w / vs[k]), Y_FLOOR) if w > 0.0 else Y_FLOOR
+                pk[k] = math.exp(LN10 * yk[k])
+                qk[k] = math.exp(-c * yk[k] * yk[k])
+                big_y = max(big_y, 1.0)
+            else:  # Newton in y (the fold scheme's variable)
+                d = min(MAX_DY, max(-MAX_DY, du / (LN10 * u)))
+                if yk[k] + d < Y_FLOOR:
+                    d = Y_FLOOR - yk[k]
+                pk[k] = scaled_exp(pk[k], LN10 * d)
+                qk[k] = scaled_exp(qk[k], -c * d * (2.0 * yk[k] + d))
+                yk[k] += d
+                big_y = max(big_y, abs(d))
+            if yk[k] > Y_ABORT:
+                return -1
+        if big_y < NEWTON_DY and big_v < NEWTON_DV * tol:
+            for k in range(nc):
+                if not yk[k] < Y_MAX:
+                    return -1
+                un[st[k]] = sk[k] * vs[k] * pk[k]
+            return it + 1
+    return -1
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _residual(n, a0, bb, d0, ox, oX, un, Un, hf, rhs, res):
+    """-(A v + h f(v) - rhs), interleaved (module docstring)."""
+    for i in range(n):
+        ip = i + 1 if i + 1 < n else 0
+        im = i - 1 if i > 0 else n - 1
+        res[2 * i] = rhs[2 * i] - (a0 * un[i] + bb * Un[i] + ox * (un[ip] + un[im]) + hf[i])
+        res[2 * i + 1] = rhs[2 * i + 1] - (d0 * Un[i] + bb * un[i] + oX * (Un[ip] + Un[im]))
+
+
+@nb.njit(cache=True)
+def be_contacts(nc, st, vs, ys, yk, sk, un, uk, fk, amp, c, meta_c):
+    """An accepted backward-Euler step's contacts: their velocities ``uk`` and applied forces ``fk``
+    (eq. 1 at the new velocity), and the fold scheme's solver state (y, 10**y, exp(-c y**2)) exact."""
+    for k in range(nc):
+        u, f, _ = _contact_force(sk[k], yk[k], vs[k], amp, c, meta_c)
+        uk[k] = un[st[k]]
+        fk[k] = f
+        ys[Y_LOG, k] = yk[k]
+        ys[Y_P, k] = math.exp(LN10 * yk[k])
+        ys[Y_Q, k] = math.exp(-c * yk[k] * yk[k])
+
+
+@nb.njit(cache=True)
+def chain_damping(p, un, Un, dampx, dampX):
+    """The pair damping forces at the new velocities (the implicit step's), for the damping work."""
+    n = un.size
+    meta = p[P_META]
+    for i in range(n):
+        ip = i + 1 if i + 1 < n else 0
+        im = i - 1 if i > 0 else n - 1
+        dampx[i] = meta * (un[ip] + un[im] + Un[i] - 3.0 * un[i])
+        dampX[i] = meta * (Un[ip] + Un[im] + un[i] - 3.0 * Un[i])
+
+
+@nb.njit(cache=True)
+def rising(nc, ys):
+    """Every contact on the rising branch with the margin that backward Euler needs (y < Y_MAX)."""
+    for k in range(nc):
+        if not ys[Y_LOG, k] < Y_MAX:
+            return False
+    return True
+
+
+@nb.njit(cache=True)
+def drive_force_sum(p, Xr, t):
+    """sum_i K_d (v_d t - X_i): the drive springs' force at the end of an implicit step."""
+    sx = 0.0
+    for i in range(Xr.size):
+        sx += Xr[i]
+    return p[P_KD] * (Xr.size * p[P_VD] * t - sx)
+
+
+__all__ = ["NEWTON_MAX", "Y_MAX", "be_contacts", "be_try", "chain_coefficients", "chain_damping", "drive_force_sum",
+           "rising", "solve_cyclic"]
