@@ -63,6 +63,9 @@ CASES = {
     "adaptive": dict(N=31, theta=0.5, integrator="adaptive", dt=1e-7, t_total=2.5e-3, seed=2),
     "adaptive, min_cycles": dict(N=31, theta=0.5, integrator="adaptive", dt=1e-7, epsilon=1.0, start="steady",
                                  sem_target=0.03, t_max=0.3, min_cycles=3, output_interval=1e-3, seed=5),
+    # issue 27: the implicit stepper (backward Euler above the explicit levels) through an event and creep
+    "implicit": dict(N=31, theta=1.0, integrator="implicit", dt=1e-7, epsilon=1.0, start="steady", t_total=0.05,
+                     output_interval=1e-3, seed=3),
 }
 SAVES = {"dead weight, automatic length": 60}
 

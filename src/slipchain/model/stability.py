@@ -102,6 +102,27 @@ def spectral_radius(B: np.ndarray, D: np.ndarray, h: float) -> float:
     return float(np.abs(np.linalg.eigvals(amplification(B, D, h))).max())
 
 
+def be_amplification(B: np.ndarray, D: np.ndarray, h: float) -> np.ndarray:
+    """Backward Euler's amplification matrices (modes, 2d, 2d) in (x/h, v), the implicit stepper's
+    linear part (integrator = 'implicit', :mod:`slipchain.engine.backends.implicit`, issue 27)::
+
+        v' = v - h (B x' + D v'),  x' = x + h v'   =>   v' = S (v - h^2 B xi),  xi' = xi + v',
+
+    S = (I + h D + h^2 B)^-1, xi = x/h. For B, D positive semidefinite every eigenvalue lies in the
+    unit disk for every h (A-stable) and A -> 0 as h -> inf for B > 0 (L-stable): a scalar mode is
+    damped by 1/|1 + h gamma + h^2 omega^2|^(1/2) per step and more."""
+    n, d, _ = B.shape
+    eye = np.broadcast_to(np.eye(d), B.shape)
+    S = np.linalg.inv(eye + h * D + h * h * B)
+    SB = h * h * S @ B
+    A = np.empty((n, 2 * d, 2 * d))
+    A[:, :d, :d] = eye - SB
+    A[:, :d, d:] = S
+    A[:, d:, :d] = -SB
+    A[:, d:, d:] = S
+    return A
+
+
 def largest_stable_step(B: np.ndarray, D: np.ndarray, rel: float = 1e-10) -> float:
     """The largest h with spectral radius <= 1 + RADIUS_TOL, by doubling then bisection to ``rel``.
 

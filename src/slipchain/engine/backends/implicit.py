@@ -295,6 +295,27 @@ def chain_damping(p, un, Un, dampx, dampX):
 
 
 @nb.njit(cache=True)
+def damping_power(dampx, dampX, u, U):
+    """sum_i (damp_x u + damp_X U): the pair damping's power (as :func:`.cpu._move` sums it)."""
+    wd = 0.0
+    for i in range(u.size):
+        wd += dampx[i] * u[i] + dampX[i] * U[i]
+    return wd
+
+
+@nb.njit(cache=True)
+def contact_power_at(nc, st, vs, u, amp, c, meta_c):
+    """sum_k f_k u_k with eq. (1) (and its damping) at the blocks' velocities ``u``."""
+    pw = 0.0
+    for k in range(nc):
+        uk = u[st[k]]
+        if uk != 0.0:
+            y = math.log10(abs(uk) / vs[k])
+            pw += (math.copysign(amp * math.exp(-c * y * y), uk) + meta_c * uk) * uk
+    return pw
+
+
+@nb.njit(cache=True)
 def rising(nc, ys):
     """Every contact on the rising branch with the margin that backward Euler needs (y < Y_MAX)."""
     for k in range(nc):
@@ -312,5 +333,5 @@ def drive_force_sum(p, Xr, t):
     return p[P_KD] * (Xr.size * p[P_VD] * t - sx)
 
 
-__all__ = ["NEWTON_MAX", "Y_MAX", "be_contacts", "be_try", "chain_coefficients", "chain_damping", "drive_force_sum",
-           "rising", "solve_cyclic"]
+__all__ = ["NEWTON_MAX", "Y_MAX", "be_contacts", "be_try", "chain_coefficients", "chain_damping", "contact_power_at",
+           "damping_power", "drive_force_sum", "rising", "solve_cyclic"]

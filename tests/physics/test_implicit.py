@@ -1,0 +1,191 @@
+"""integrator = 'implicit' (issue 27): backward Euler through stick and creep, the adaptive step's
+explicit levels through slip events.
+
+Independent checks: the compiled cyclic block-tridiagonal solve against scipy's dense solve; a
+contact-free step against the linear analysis of backward Euler (model/stability.py), far beyond
+the explicit stable step; first order in the step through creep (the error against a finer
+step halves with the step); agreement with the explicit adaptive step at the physical contact
+stiffness through slip events and creep (event samples, drops, reload rate, mean force, energy)
+with over ten times fewer steps, under the spring drive and the dead weight; the refusals.
+Checkpoints resume bit for bit: tests/physics/test_checkpoint.py ("implicit").
+"""
+
+import copy
+
+import numpy as np
+import pytest
+import scipy.linalg
+from hypothesis import given, settings
+from hypothesis import strategies as hs
+
+import slipchain as sc
+from slipchain.engine import scheme as S
+from slipchain.engine.backends import Batch
+from slipchain.engine.backends import implicit
+from slipchain.engine.backends.base import kernel_params
+from slipchain.engine.backends.host import CPUBackend
+from slipchain.model.config import ConfigError, make_config
+from slipchain.model.stability import be_amplification, chain_modes
+from slipchain.model.system import build_system, initial_state
+
+EPS1 = dict(N=31, theta=1.0, eta_c=1e5, v_d=1e-3, epsilon=1.0, seed=3, start="steady", dt=1e-7)
+
+
+def _dense(a, bb, d, ox, oX):
+    n = a.size
+    J = np.zeros((2 * n, 2 * n))
+    for i in range(n):
+        j = (i + 1) % n
+        J[2 * i, 2 * i], J[2 * i + 1, 2 * i + 1] = a[i], d
+        J[2 * i, 2 * i + 1] = J[2 * i + 1, 2 * i] = bb
+        J[2 * i, 2 * j] = J[2 * j, 2 * i] = ox
+        J[2 * i + 1, 2 * j + 1] = J[2 * j + 1, 2 * i + 1] = oX
+    return J
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=hs.integers(3, 40), seed=hs.integers(0, 2**31), scale=hs.floats(1e-6, 1e6))
+def test_solve_cyclic_is_scipy_dense_solve(n, seed, scale):
+    """The compiled O(N) cyclic block solve (Thomas + rank-2 Woodbury) is the dense solve, for
+    symmetric positive definite systems of the implicit chain's shape at any scale."""
+    rng = np.random.default_rng(seed)
+    ox, oX, bb = -rng.uniform(0, 1, 3) * scale
+    a = (2 * abs(ox) + abs(bb)) * (1 + rng.uniform(1e-3, 10, n))
+    d = (2 * abs(oX) + abs(bb)) * (1 + rng.uniform(1e-3, 10))
+    r = rng.normal(size=2 * n)
+    z = np.empty(2 * n)
+    implicit.solve_cyclic(a, bb, d, ox, oX, r, z)
+    J = _dense(a, bb, d, ox, oX)
+    want = scipy.linalg.solve(J, r, assume_a="pos")
+    assert np.allclose(z, want, rtol=1e-9, atol=1e-12 * np.abs(want).max())
+
+
+def _mode_step(cfg, k: int, h: float, steps: int):
+    """Backward Euler steps of the contact-free chain (no drive) from one Fourier mode (cos, wave
+    number k) with given amplitudes; the modal (x/h, X/h, u, U) before and after."""
+    system = build_system(cfg)
+    p = kernel_params(system).copy()
+    p[S.P_VD] = p[S.P_FCONST] = 0.0
+    n = cfg.N
+    shape = np.cos(2 * np.pi * k * np.arange(n) / n)
+    amp = np.array([2e-6, -1e-6, 3e-3, 1e-3])  # x, X (m), u, U (m/s)
+    x, X, u, U = (a * shape for a in amp)
+    none_i, none_f = np.zeros(0, dtype=np.int64), np.zeros(0)
+    ys = np.zeros((S.N_YS, 0))
+    un, Un = np.empty(n), np.empty(n)
+    for s in range(steps):
+        its = implicit.be_try(p, x, u, X, U, none_i, none_f, 0, ys, un, Un, h, (s + 1) * h, 1e-5, none_f.copy(),
+                              none_f.copy(), np.zeros(2 * n), False)
+        assert its > 0
+        x, X, u, U = x + h * un, X + h * Un, un.copy(), Un.copy()
+    proj = shape / (shape @ shape)
+    return np.array([amp[0] / h, amp[1] / h, amp[2], amp[3]]), np.array([proj @ x / h, proj @ X / h, proj @ u, proj @ U])
+
+
+@pytest.mark.parametrize("h", [1e-7, 2e-6, 1e-4, 1e-1])
+def test_contact_free_chain_relaxes_as_the_linear_analysis_says(h):
+    """Each Fourier mode of the contact-free chain is carried by backward Euler's amplification
+    matrix (stability.be_amplification: springs and pair damping together), for steps from below
+    to six decades above the explicit stable step (~7e-7 s); every mode decays (A-stable) and the
+    step's modulus tends to 0 as h grows (L-stable)."""
+    cfg = make_config(N=31)
+    B, D = chain_modes(cfg.N, cfg.Ly, cfg.m, cfg.N_L, cfg.K, cfg.K_L, cfg.K_T, cfg.K_d, cfg.K_Y, cfg.K_LY, cfg.eta)
+    steps = 5
+    for k in (1, 7, 15):
+        start, end = _mode_step(cfg, k, h, steps)
+        A = be_amplification(B[k:k + 1], D[k:k + 1], h)[0]
+        want = np.linalg.matrix_power(A, steps) @ start  # A acts on (x/h, X/h, u, U)
+        assert np.allclose(end, want, rtol=1e-8, atol=1e-12 * np.abs(start).max()), (k, end, want)
+    radius = np.abs(np.linalg.eigvals(be_amplification(B, D, h))).max()
+    assert radius < 1.0
+    assert np.abs(np.linalg.eigvals(be_amplification(B, D, 1e3 * h))).max() < radius
+    assert np.abs(np.linalg.eigvals(be_amplification(B, D, 10.0))).max() < 1e-5
+
+
+def test_first_order_in_the_step_through_creep():
+    """From one state in the creep after the first slip event (epsilon = 1, N = 31), 0.5 s of creep
+    with the step capped at dt 2**L: the error against a much finer cap halves with the step
+    (backward Euler is first order) and is small (below 1e-4 of the state at 1.6 ms steps)."""
+    cfg = make_config(**EPS1, output_interval=0.05, t_total=1.0, integrator="implicit", step_tol=1.0)
+    system = build_system(cfg)
+    b0 = Batch.pack([system], [initial_state(system)])
+    CPUBackend().advance(b0, 1, cfg.sample_steps)  # 0.05 s: past the event at 2 ms
+
+    def creep(level):
+        b = copy.deepcopy(b0)
+        b.step_control[:, 4] = level
+        CPUBackend().advance(b, 1, 10 * cfg.sample_steps)
+        assert b.step_control[0, 2] - b0.step_control[0, 2] < 2 * 5e-1 / (cfg.dt * 2**level) + 200
+        return np.concatenate([b.x[0], b.X[0]])
+
+    ref = creep(8)
+    err = {L: np.abs(creep(L) - ref).max() / np.abs(ref).max() for L in (11, 12, 13, 14)}
+    ratios = [err[L + 1] / err[L] for L in (11, 12, 13)]
+    assert all(1.6 < r < 2.5 for r in ratios), (err, ratios)
+    assert err[14] < 1e-4, err
+
+
+def _events(ds):
+    f, t = ds.f_d.values, ds.time.values
+    drops = np.diff(f)
+    at = np.where(drops < -0.05 * f.max())[0]
+    return f, t, at[np.r_[True, np.diff(at) > 1]]  # the first sample of each event
+
+
+def _control(cfg: dict, n_samples: int) -> np.ndarray:
+    system = build_system(make_config(**cfg))
+    batch = Batch.pack([system], [initial_state(system)])
+    CPUBackend().advance(batch, n_samples, system.config.sample_steps)
+    return batch.step_control[0]
+
+
+def test_agrees_with_the_adaptive_step_at_the_physical_contact_stiffness():
+    """epsilon = 1, steady start, N = 31, 1.3 s (the start event at 2 ms, a slip event at 1.19 s and
+    the creep between them): the slip events land in the same output samples with the same drop
+    of the drive force, the reload rate and the mean drive force agree, the energy balance holds,
+    and the implicit stepper takes over ten times fewer steps than the explicit adaptive one."""
+    cfg = dict(EPS1, output_interval=1e-3, t_total=1.3)
+    imp = sc.run(dict(cfg, integrator="implicit"))
+    ada = sc.run(dict(cfg, integrator="adaptive"))
+    (fi, t, ei), (fa, _, ea) = _events(imp), _events(ada)
+    assert len(ea) == 2 and np.array_equal(ei, ea)
+    for k in ea:  # an event may spread over two samples: compare the drop over both
+        drop_i, drop_a = fi[k] - fi[k + 2], fa[k] - fa[k + 2]
+        assert abs(drop_i - drop_a) < 0.05 * drop_a, (t[k], drop_i, drop_a)
+    creep = slice(ea[0] + 100, ea[1] - 100)  # the reload between the two events
+    rate_i, rate_a = (np.polyfit(t[creep], f[creep], 1)[0] for f in (fi, fa))
+    assert abs(rate_i - rate_a) < 0.01 * rate_a
+    assert abs(fi.mean() - fa.mean()) < 2e-3 * fa.mean()
+    assert imp.attrs["check_energy_balance_passed"] == 1 and imp.attrs["check_energy_balance"] < 1e-3
+    steps_i = _control(dict(cfg, integrator="implicit", t_total=0.2), 200)[2]
+    steps_a = _control(dict(cfg, integrator="adaptive", t_total=0.2), 200)[2]
+    assert steps_i < steps_a / 10, (steps_i, steps_a)
+
+
+def test_agrees_with_the_adaptive_step_under_the_dead_weight():
+    """The dead-weight drive (a constant force on the upper blocks: in the implicit system's right-hand
+    side), epsilon = 1: the steady velocity and the slider's position agree with the adaptive step."""
+    cfg = dict(EPS1, output_interval=1e-3, t_total=0.5, dead_weight=0.3, start="rest")
+    imp, ada = sc.run(dict(cfg, integrator="implicit")), sc.run(dict(cfg, integrator="adaptive"))
+    assert imp.attrs["velocity_status"] == ada.attrs["velocity_status"] == "ok"
+    assert abs(imp.attrs["velocity"] / ada.attrs["velocity"] - 1) < 1e-3
+    assert np.abs(imp.X_mean.values - ada.X_mean.values).max() < 1e-4 * np.abs(ada.X_mean.values).max()
+    assert imp.attrs["check_energy_balance_passed"] == 1
+
+
+@pytest.mark.parametrize("extra, names", [
+    (dict(geometry="chain2d", Ly=4), ("integrator", "chain2d")),
+    (dict(geometry="slab", Ly=8, N=8), ("integrator", "slab")),
+    (dict(material="prony"), ("integrator", "elastic")),
+])
+def test_combinations_not_built_yet_are_refused_by_name(extra, names):
+    with pytest.raises(ConfigError) as e:
+        make_config(**dict(dict(N=16, theta=0.5), **extra), integrator="implicit")
+    assert all(w in str(e.value) for w in names), str(e.value)
+
+
+def test_step_tol_is_the_implicit_steppers_tolerance_too():
+    cfg = make_config(N=16, integrator="implicit", step_tol=0.003, dt=1e-7)
+    assert cfg.implicit_levels > cfg.step_levels
+    with pytest.raises(ConfigError, match="step_tol"):
+        make_config(N=16, integrator="fold", step_tol=0.003, dt=1e-7)
