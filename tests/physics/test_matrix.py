@@ -18,7 +18,7 @@ from slipchain.model.config import ConfigError, make_config
 GEOMETRY = {"chain": dict(N=8), "chain2d": dict(geometry="chain2d", N=4, Ly=4),
             "slab": dict(geometry="slab", N=4, Ly=4), "halfspace": dict(geometry="halfspace", N=4, Ly=4)}
 DRIVE = {"spring": {}, "dead_weight": dict(dead_weight=0.7)}
-STEP = {"fixed": dict(dt=2e-8), "fold": dict(dt=1e-7), "adaptive": dict(dt=2e-8)}
+STEP = {"fixed": dict(dt=2e-8), "fold": dict(dt=1e-7), "adaptive": dict(dt=2e-8), "implicit": dict(dt=2e-8)}
 COMMON = dict(theta=0.5, start="steady", output_interval=1e-5, seed=1)
 CELLS = [(g, i, d, m) for m in MATERIALS for g in GEOMETRIES for i in INTEGRATORS for d in DRIVES]
 

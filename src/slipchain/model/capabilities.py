@@ -34,6 +34,13 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
     """None where the combination runs, else why not (a sentence for an error message)."""
     if drive == "dead_weight" and not _GEOMETRIES[geometry].top:
         return "a half-space has no top to carry the weight (use geometry = 'slab')"
+    if integrator == "implicit":
+        if geometry != "chain":
+            return (f"integrator = 'implicit' runs on the chain only in this version (its backward Euler solves the "
+                    f"chain's cyclic banded system; geometry = '{geometry}': use integrator = 'adaptive')")
+        if material != "elastic":
+            return ("integrator = 'implicit' runs with material = 'elastic' only in this version (the Maxwell arms are "
+                    "not in its implicit system; use integrator = 'fold')")
     if material == "prony":
         if _GEOMETRIES[geometry].spectral and drive != "dead_weight":
             return (f"material = 'prony' runs on the {geometry} under the dead weight only in this version (with the "
@@ -46,13 +53,6 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
                     "compound the adaptive step starts slip events 10-15 us early at every tolerance, though it "
                     "agrees with the fixed step to 8e-4 before them: docs/guide/viscoelastic.md; give "
                     "integrator = 'fold')")
-    if integrator == "implicit":
-        if geometry != "chain":
-            return (f"integrator = 'implicit' runs on the chain only in this version (its backward Euler solves the "
-                    f"chain's cyclic banded system; geometry = '{geometry}': use integrator = 'adaptive')")
-        if material != "elastic":
-            return ("integrator = 'implicit' runs with material = 'elastic' only in this version (the Maxwell arms are "
-                    "not in its implicit system; use integrator = 'fold')")
     if backend == "cpu":
         return None
     if integrator != "fixed":
