@@ -28,8 +28,10 @@ ALLOWED: dict[str, str] = {
     "Ly": "an integer >= 1 (blocks across the sliding direction, y; 1 for the chain)",
     "geometry": "one of 'chain', 'chain2d', 'slab', 'halfspace'",
     "integrator": "one of 'adaptive' (the default: fold-aware contacts and a step that doubles up to the stable "
-                  "step), 'fixed' (dt below the unique-root limit), 'fold' (fold-aware contacts, issue 12)",
-    "step_tol": "a number > 0 (integrator = 'adaptive': largest local velocity error per step, in units of v_d)",
+                  "step), 'fixed' (dt below the unique-root limit), 'fold' (fold-aware contacts, issue 12), "
+                  "'implicit' (the adaptive step, and backward Euler through creep above the stable step; issue 27)",
+    "step_tol": "a number > 0 (integrator = 'adaptive' or 'implicit': largest local velocity error per step, in "
+                "units of v_d)",
     "min_cycles": "an integer >= 0 (automatic length: slip cycles the steady window must hold; 0 for none)",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
     "c": "a number >= 0",
@@ -125,7 +127,11 @@ class Config(BaseModel):
     to 0.9 of the stable step, error-controlled by ``step_tol`` in units of v_d:
     :mod:`slipchain.engine.backends.adaptive`), 'fixed' (the scheme of slipchain.engine.scheme, dt
     below the unique-root limit; the default before, and what a stored config without the key
-    means) or 'fold' (fold-aware contacts: dt bounded by the explicit springs and dampers only);
+    means), 'fold' (fold-aware contacts: dt bounded by the explicit springs and dampers only) or
+    'implicit' (issue 27: the adaptive step up to its top level, and above it backward Euler with
+    springs, damping and contacts implicit while every contact is on the rising branch of eq. (1),
+    the step bounded by ``step_tol`` and the output samples alone, up to dt 2**24:
+    :mod:`slipchain.engine.backends.implicit`; the chain with material 'elastic');
     ``dt`` absent: :attr:`default_dt`; every dt must lie below :attr:`dt_stable`;
     ``min_cycles``: the automatic length also needs this many cycles of f_d in its steady window
     (:class:`slipchain.engine.control.UntilConverged`; for the long slip cycles at epsilon = 1);

@@ -59,8 +59,11 @@ from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_a
 from .base import Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice_commit, lattice_explicit, row_parameters
 
-# ctl columns: the row's place in its output sample
-CT_J, CT_LEVEL, CT_LOADED, CT_HAVE = range(4)
+# ctl columns: the row's place in its output sample; the implicit stepper's back-off (explicit steps
+# to wait before the next backward-Euler try, and the current wait after a failed one)
+CT_J, CT_LEVEL, CT_LOADED, CT_HAVE, CT_WAIT, CT_BACKOFF = range(6)
+N_CT = 6
+MAX_BACKOFF = 1024
 # control columns (Batch.step_control): tolerance (m/s), the adaptive step's top level, steps accepted, rejected,
 # the implicit stepper's top level (:mod:`.implicit`), the last accepted step's error estimate
 CTRL_TOP_IMPLICIT, CTRL_ERR = 4, 5
@@ -155,8 +158,10 @@ def implicit_stepper(explicit, commit):
                 was = cr[CT_LEVEL]
                 res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
                             sample_steps, rc, scratch)
-                # at the explicit top with a small error: the next step may be implicit
-                if (top > top_explicit and was >= top_explicit and cr[CT_LEVEL] == top_explicit
+                # at the explicit top with a small error: the next step may be implicit (unless waiting)
+                if cr[CT_WAIT] > 0:
+                    cr[CT_WAIT] -= 1
+                elif (top > top_explicit and was >= top_explicit and cr[CT_LEVEL] == top_explicit
                         and ctrl[CTRL_ERR] < STEP_UP * tol and implicit.rising(nc, ys)):
                     cr[CT_LEVEL] = top_explicit + 1
                 return res
@@ -167,33 +172,37 @@ def implicit_stepper(explicit, commit):
             err = 0.0
             if its > 0 and cr[CT_HAVE] > 0:
                 err = _error(n, ur, Ur, un, Un, ap, h)
-            if its < 0 or err > tol:  # rejected: finer (down to the explicit top, the adaptive step's levels)
+            bal = scale = fsum = w_drive = w_damp = w_contact = 0.0
+            if its > 0 and err <= tol:  # the works by the trapezoidal rule, and the step's energy residual
+                bal, scale, fsum, w_drive, w_damp, w_contact = implicit.step_balance(p, xr, ur, Xr, Ur, un, Un, h, t1,
+                                                                                     nc, st, vs, dampx, dampX)
+            if its < 0 or err > tol or abs(bal) > implicit.ENERGY_TOL * scale:
+                # rejected: finer (down to the explicit top, the adaptive step's levels); an energy residual
+                # (numerical dissipation, ~ h) one level down
                 ctrl[3] += 1.0
-                cr[CT_LEVEL] = top_explicit if its < 0 else max(_rejected_level(lv, err, tol), top_explicit)
-                if its >= 0 and cr[CT_LEVEL] == lv:
+                if its < 0:
+                    cr[CT_LEVEL] = top_explicit
+                elif err > tol:
+                    cr[CT_LEVEL] = max(min(_rejected_level(lv, err, tol), lv - 1), top_explicit)
+                else:
                     cr[CT_LEVEL] = lv - 1
+                if cr[CT_LEVEL] == top_explicit:  # back to the explicit steps: wait longer before each new try
+                    cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
+                    cr[CT_WAIT] = cr[CT_BACKOFF]
                 continue
+            cr[CT_BACKOFF] = 0
             _keep_acceleration(n, ur, Ur, un, Un, ap, h)
-            # the step's works and mean drive force by the trapezoidal rule (start and end), not the end
-            # alone: a right-end rule errs by h/2 times the change of the power per step, which over
-            # steps of 1e-3 s of creep is a visible energy error (module docstring of .implicit)
-            f0 = implicit.drive_force_sum(p, Xr, t1 - h)
-            pc0 = implicit.contact_power_at(nc, st, vs, ur, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
-            implicit.chain_damping(p, ur, Ur, dampx, dampX)
-            pd0 = implicit.damping_power(dampx, dampX, ur, Ur)
             implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
-            w_contact = 0.5 * (_weighted_contact_sums(nc, fk, uk, ca, slow, w) + pc0) * h
-            implicit.chain_damping(p, un, Un, dampx, dampX)
-            w_damp, w_visc = commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
-            w_damp = 0.5 * (w_damp + pd0 * h)
-            fsum = 0.5 * (f0 + implicit.drive_force_sum(p, Xr, t1))
+            _weighted_contact_sums(nc, fk, uk, ca, slow, w)  # the contacts' statistics (at the step's end)
+            commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
             ctrl[2] += 1.0
             ctrl[CTRL_ERR] = err
-            if cr[CT_HAVE] > 0 and err < STEP_UP * tol and lv < top:
+            # up while both the error and the energy residual (~ h) leave room for a doubling
+            if cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale and lv < top:
                 lv += 1
             cr[CT_LEVEL] = lv
             cr[CT_HAVE] = 1
-            return w, fsum / n * w, w_contact, w_damp, fsum * p[P_VD] * h, w_visc
+            return w, fsum / n * w, w_contact, w_damp, w_drive, 0.0
 
     return step
 
@@ -216,6 +225,8 @@ def start_sample(row, n_contacts, ysolve, params, ctl):
     ctl[row, CT_LEVEL] = 0
     ctl[row, CT_LOADED] = -1
     ctl[row, CT_HAVE] = 0
+    ctl[row, CT_WAIT] = 0
+    ctl[row, CT_BACKOFF] = 0
 
 
 def kernel_driver(stepper):
@@ -236,7 +247,7 @@ def kernel_driver(stepper):
         scratch = (un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave)  # (a tuple: a call of more than 30 arguments
         # compiles to CALL_FUNCTION_EX, which numba cannot inline)
         Fr = np.zeros(0)
-        ctl = np.zeros((nb_rows, 4), dtype=np.int64)
+        ctl = np.zeros((nb_rows, N_CT), dtype=np.int64)
         ap = np.zeros(2 * n)
         for row in range(nb_rows):
             if status[row] >= 0:
@@ -345,7 +356,7 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
 
     adaptive, folds, control = _stepper_inputs(batch)
     step_rows = loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name)
-    ctl = np.zeros((b, 4), dtype=np.int64)
+    ctl = np.zeros((b, N_CT), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, cmax)
     for s in range(n_samples):

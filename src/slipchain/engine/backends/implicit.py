@@ -60,6 +60,7 @@ NEWTON_DY = 1e-6  # converged: every contact's last update below this (decades; 
 NEWTON_DV = 1e-4  # ... and every other block's below this times the tolerance (m/s)
 MAX_DY = 2.0  # largest change of a contact's y in one Newton iteration (decades)
 Y_FLOOR = -40.0  # y of a contact whose velocity the update puts at exactly zero
+ENERGY_TOL = 1e-4  # a step's energy residual (trapezoidal works) at most this fraction of its works (module docstring)
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -316,6 +317,52 @@ def contact_power_at(nc, st, vs, u, amp, c, meta_c):
 
 
 @nb.njit(cache=True)
+def chain_energy(p, xr, ur, Xr, Ur, h, t):
+    """The chain's mechanical energy at (x + h u, u, X + h U, U) and drive time t: kinetic, the springs
+    K, K_L, K_T, the drive springs K_d (v_d t - X) and the dead weight's potential -F_b X (h = 0:
+    the state itself; h > 0: the state a step of velocities (u, U) reaches, without moving it)."""
+    n = xr.size
+    m, mL = p[P_M], p[P_ML]
+    K, KL, KT, Kd = p[P_K], p[P_KL], p[P_KT], p[P_KD]
+    drive = p[P_VD] * t
+    fconst = p[P_FCONST]
+    e = 0.0
+    for i in range(n):
+        ip = i + 1 if i + 1 < n else 0
+        xi, Xi = xr[i] + h * ur[i], Xr[i] + h * Ur[i]
+        dx = xr[ip] + h * ur[ip] - xi
+        dX = Xr[ip] + h * Ur[ip] - Xi
+        e += 0.5 * (m * ur[i] * ur[i] + mL * Ur[i] * Ur[i] + K * dx * dx + KL * dX * dX + KT * (Xi - xi) ** 2
+                    + Kd * (drive - Xi) ** 2) - fconst * Xi
+    return e
+
+
+@nb.njit(cache=True)
+def step_balance(p, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs, dampx, dampX):
+    """A backward-Euler step's works by the trapezoidal rule between its start (x, u, X, U) and its
+    end (x + h u', u', X + h U', U'), and its energy residual, without moving anything: returns
+    (the residual dE - W, the sum of the works' magnitudes, the mean drive force sum, the drive's,
+    the damping's and the contacts' work; the contacts' as dissipated, f u h)."""
+    amp, c, meta_c = p[P_AMP], p[P_C], p[P_M] * p[P_ETAC]
+    f0 = drive_force_sum(p, Xr, t1 - h)
+    sx = 0.0
+    for i in range(Xr.size):
+        sx += Xr[i] + h * Un[i]
+    f1 = p[P_KD] * (Xr.size * p[P_VD] * t1 - sx)
+    chain_damping(p, ur, Ur, dampx, dampX)
+    pd0 = damping_power(dampx, dampX, ur, Ur)
+    chain_damping(p, un, Un, dampx, dampX)
+    pd1 = damping_power(dampx, dampX, un, Un)
+    pc = contact_power_at(nc, st, vs, ur, amp, c, meta_c) + contact_power_at(nc, st, vs, un, amp, c, meta_c)
+    fsum = 0.5 * (f0 + f1)
+    w_drive = fsum * p[P_VD] * h
+    w_damp = 0.5 * (pd0 + pd1) * h
+    w_contact = 0.5 * pc * h
+    de = chain_energy(p, xr, un, Xr, Un, h, t1) - chain_energy(p, xr, ur, Xr, Ur, 0.0, t1 - h)
+    return de - (w_drive + w_damp - w_contact), abs(w_drive) + abs(w_damp) + abs(w_contact), fsum, w_drive, w_damp, w_contact
+
+
+@nb.njit(cache=True)
 def rising(nc, ys):
     """Every contact on the rising branch with the margin that backward Euler needs (y < Y_MAX)."""
     for k in range(nc):
@@ -333,5 +380,6 @@ def drive_force_sum(p, Xr, t):
     return p[P_KD] * (Xr.size * p[P_VD] * t - sx)
 
 
-__all__ = ["NEWTON_MAX", "Y_MAX", "be_contacts", "be_try", "chain_coefficients", "chain_damping", "contact_power_at",
-           "damping_power", "drive_force_sum", "rising", "solve_cyclic"]
+__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Y_MAX", "be_contacts", "be_try", "chain_coefficients", "chain_damping", "contact_power_at",
+           "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
+           "step_balance"]
