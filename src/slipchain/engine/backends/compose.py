@@ -64,6 +64,8 @@ from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice
 CT_J, CT_LEVEL, CT_LOADED, CT_HAVE, CT_WAIT, CT_BACKOFF = range(6)
 N_CT = 6
 MAX_BACKOFF = 1024
+# an implicit step (a Newton solve, ~10 explicit steps' cost) pays only this many doublings above the explicit top
+MIN_GAIN = 3
 # control columns (Batch.step_control): tolerance (m/s), the adaptive step's top level, steps accepted, rejected,
 # the implicit stepper's top level (:mod:`.implicit`), the last accepted step's error estimate
 CTRL_TOP_IMPLICIT, CTRL_ERR = 4, 5
@@ -190,7 +192,8 @@ def implicit_stepper(explicit, commit):
                     cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
                     cr[CT_WAIT] = cr[CT_BACKOFF]
                 continue
-            cr[CT_BACKOFF] = 0
+            if lv >= top_explicit + MIN_GAIN:
+                cr[CT_BACKOFF] = 0
             _keep_acceleration(n, ur, Ur, un, Un, ap, h)
             implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
             _weighted_contact_sums(nc, fk, uk, ca, slow, w)  # the contacts' statistics (at the step's end)
@@ -200,6 +203,10 @@ def implicit_stepper(explicit, commit):
             # up while both the error and the energy residual (~ h) leave room for a doubling
             if cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale and lv < top:
                 lv += 1
+            elif lv < top_explicit + MIN_GAIN:  # stuck within a few doublings of the explicit top: explicit is cheaper
+                lv = top_explicit
+                cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
+                cr[CT_WAIT] = cr[CT_BACKOFF]
             cr[CT_LEVEL] = lv
             cr[CT_HAVE] = 1
             return w, fsum / n * w, w_contact, w_damp, w_drive, 0.0

@@ -33,12 +33,21 @@ accepted step whose error is below STEP_UP * tol while every contact is on the r
 
 **Error and stability.** The error estimate is the adaptive step's (h/2 max |a^n - a^(n-1)|,
 :func:`.adaptive._error`), so ``step_tol`` means the same for both. Backward Euler is L-stable for
-the linear part (every mode, springs and damping together, decays for every h: the amplification of
-a mode with frequency omega and damping rate gamma is 1/(1 + h gamma + h**2 omega**2) in modulus
-below 1; :func:`slipchain.model.stability.be_amplification`), so its steps are bounded by accuracy
-alone; rejection is the accuracy control, not a stability mechanism. Its numerical dissipation per
-step, 1/2 (dv^T M dv + dq^T K dq), is not a work term: the energy balance holds to O(h) as for the
-explicit step (measured in tests/physics/test_implicit.py).
+the linear part (every mode, springs and damping together, decays for every h: the eigenvalues of
+each mode's amplification matrix lie in the unit disk for every h and tend to 0 as h grows:
+:func:`slipchain.model.stability.be_amplification`), so its steps are bounded by accuracy alone;
+rejection is the accuracy control, not a stability mechanism.
+
+**Works and energy.** An implicit step's works (drive, damping, contacts) and its share of the mean
+drive force are taken by the trapezoidal rule between its start and end (:func:`step_balance`; the
+right-end rule errs by h/2 times the change of the power per step). Backward Euler's numerical
+dissipation per step, 1/2 (dv^T M dv + dq^T K dq), is no work term; it is the step's **energy
+residual** (the change of :func:`chain_energy` minus the works), and a step is accepted only if it
+is at most ENERGY_TOL of the magnitudes of the step's works (else it is taken again one level
+down): where the blocks ring (steady sliding at epsilon = 1e-2) backward Euler would otherwise damp
+their oscillations numerically instead of by the pair damping and the contacts (docs/numerics.md,
+"The implicit stepper"). A try that falls back to the explicit levels makes the stepper wait 1, 2,
+4, ... (at most MAX_BACKOFF of :mod:`.compose`) explicit steps before the next.
 
 Geometry: the chain (1-D) with material 'elastic', either drive, in this version.
 """
