@@ -18,6 +18,8 @@ from ...model.geometries import geometry_of
 from ...results.observables import SLOW_FRACTION
 from .. import scheme as S
 
+N_CARRY = 4  # Batch.carry's head: level, have (an error estimate's memory), wait, back-off (.compose's CT_ columns 1, 3, 4, 5)
+
 
 @dataclass
 class Batch:
@@ -50,6 +52,9 @@ class Batch:
     step_control: np.ndarray | None = None
     bstate: np.ndarray | None = None  # (B, 2J + 4, N): the bulk's internal fields (material 'prony'; J = 0: elastic)
     material: np.ndarray | None = None  # (B, 2, J): r_j and tau_j of each row's Prony series
+    # (B, N_CARRY + 2N) with integrator = 'implicit', else (B, 0): the stepper's level, error memory and back-off
+    # (:data:`.compose.CT_LEVEL` ...) and the last step's accelerations, carried from one output sample to the next
+    carry: np.ndarray | None = None
 
     @property
     def implicit(self) -> bool:
@@ -139,6 +144,7 @@ class Batch:
             step_control=step_control,
             bstate=bstate,
             material=material,
+            carry=np.zeros((b, N_CARRY + 2 * n) if c0.integrator == "implicit" else (b, 0)),
         )
 
     def state(self, row: int) -> State:

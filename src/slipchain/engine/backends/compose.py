@@ -56,7 +56,7 @@ from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N
 from . import implicit, spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
-from .base import Batch, ChunkOutput
+from .base import N_CARRY, Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice_commit, lattice_explicit, row_parameters
 
 # ctl columns: the row's place in its output sample; the implicit stepper's back-off (explicit steps
@@ -155,7 +155,14 @@ def implicit_stepper(explicit, commit):
         top = int(ctrl[CTRL_TOP_IMPLICIT])
         n = xr.size
         while True:
-            lv = _grid_level(cr[CT_LEVEL], j, sample_steps)
+            want = min(cr[CT_LEVEL], top)  # the controller's level; the time grid may allow less (the sample's end)
+            lv = _grid_level(want, j, sample_steps)
+            if lv <= top_explicit < want:  # the sample's last base steps: explicit, the controller's level kept
+                cr[CT_LEVEL] = lv
+                res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
+                            sample_steps, rc, scratch)
+                cr[CT_LEVEL] = want
+                return res
             if lv <= top_explicit:
                 was = cr[CT_LEVEL]
                 res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
@@ -202,7 +209,9 @@ def implicit_stepper(explicit, commit):
             ctrl[CTRL_ERR] = err
             # up while both the error and the energy residual (~ h) leave room for a doubling
             if cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale and lv < top:
-                lv += 1
+                lv = max(lv + 1, want)  # (a step the grid cut short keeps the controller's level)
+            elif lv < want:  # cut short by the grid, and no room to grow: the level this step could take
+                pass
             elif lv < top_explicit + MIN_GAIN:  # stuck within a few doublings of the explicit top: explicit is cheaper
                 lv = top_explicit
                 cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
@@ -236,13 +245,30 @@ def start_sample(row, n_contacts, ysolve, params, ctl):
     ctl[row, CT_BACKOFF] = 0
 
 
+@nb.njit(cache=True)
+def _restore_carry(cy, cr):
+    """The implicit stepper's place at the start of a sample: where the last sample left it (Batch.carry)."""
+    cr[CT_LEVEL] = int(cy[0])
+    cr[CT_HAVE] = int(cy[1])
+    cr[CT_WAIT] = int(cy[2])
+    cr[CT_BACKOFF] = int(cy[3])
+
+
+@nb.njit(cache=True)
+def _save_carry(cy, cr):
+    cy[0] = cr[CT_LEVEL]
+    cy[1] = cr[CT_HAVE]
+    cy[2] = cr[CT_WAIT]
+    cy[3] = cr[CT_BACKOFF]
+
+
 def kernel_driver(stepper):
     """The whole chunk in one compiled call, row after row (a body that needs nothing from outside
     the kernel: the chains)."""
 
     @nb.njit(cache=True)
     def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
-                n_samples, sample_steps, out, acc, cacc, status):
+                carry, n_samples, sample_steps, out, acc, cacc, status):
         nb_rows, n = x.shape
         # :func:`scratch_arrays`' work arrays, allocated here (fresh allocations in view of the optimiser, likely why:
         # measured with benchmarks/bench_compose.py, through scratch_arrays the kernel is 4-5 % slower)
@@ -268,8 +294,13 @@ def kernel_driver(stepper):
             w_damp = 0.0
             w_contact = 0.0
             w_visc = 0.0
+            keep = carry.shape[1] > 0  # the implicit stepper: its level and error memory go on across samples
+            if keep:
+                ap[:] = carry[row, N_CARRY:]
             for s in range(n_samples):
                 start_sample(row, n_contacts, ysolve, params, ctl)
+                if keep:
+                    _restore_carry(carry[row], cr)
                 fds = 0.0
                 j = 0
                 for _ in range(sample_steps):  # every step takes at least one base step (a counted loop: faster)
@@ -284,9 +315,13 @@ def kernel_driver(stepper):
                     fds += dfd
                     steps[row] += w
                     j += w
+                if keep:
+                    _save_carry(carry[row], cr)
                 if not _end_sample(xr, Xr, fds, sample_steps, w_contact, out[row, s]):
                     status[row] = steps[row]
                     break
+            if keep:
+                carry[row, N_CARRY:] = ap
             acc[row, A_WDRIVE] += w_drive
             acc[row, A_WDAMP] += w_damp
             acc[row, A_WCONTACT] += w_contact
@@ -387,8 +422,8 @@ def kernel_advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutp
     adaptive, folds, control = _stepper_inputs(batch)
     loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name)(
         batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar, batch.n_contacts,
-        batch.ysolve, folds, control, batch.bstate, batch.material, n_samples, sample_steps, out, acc, cacc,
-        batch.status)
+        batch.ysolve, folds, control, batch.bstate, batch.material, _carry(batch), n_samples, sample_steps, out, acc,
+        cacc, batch.status)
     return ChunkOutput(out, acc, cacc)
 
 
@@ -398,6 +433,11 @@ def advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
     if BODIES[batch.geometry] == "spectral":
         return fft_advance(batch, n_samples, sample_steps)
     return kernel_advance(batch, n_samples, sample_steps)
+
+
+def _carry(batch: Batch) -> np.ndarray:
+    """The implicit stepper's state carried across samples (Batch.carry), or an empty (B, 0) stand-in."""
+    return batch.carry if batch.carry is not None else np.zeros((batch.x.shape[0], 0))
 
 
 def _chunk_outputs(batch: Batch, n_samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
