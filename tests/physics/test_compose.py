@@ -46,11 +46,12 @@ def _run(adaptive: bool, dt: float, n_samples: int, sample_steps: int, tol: floa
     p = np.zeros((1, S.N_PARAMS))
     p[0, S.P_M] = p[0, S.P_ML] = 1.0
     p[0, S.P_DT] = dt
-    control = np.array([[tol, float(levels), 0.0, 0.0]])
+    control = np.array([[tol, float(levels), 0.0, 0.0, float(levels), 0.0]])  # (compose.N_CONTROL columns)
     out = np.zeros((1, n_samples, S.N_OUT))
     steps = np.zeros(1, dtype=np.int64)
     advance(x, u, X, U, steps, p, np.zeros((1, 1), dtype=np.int64), np.ones((1, 1)), np.zeros(1, dtype=np.int64),
-            np.zeros((1, S.N_YS, 1)), np.zeros((1, levels + 1, 2, 1)), control, np.zeros((1, 1)), np.zeros((1, 1)), n_samples, sample_steps, out,
+            np.zeros((1, S.N_YS, 1)), np.zeros((1, levels + 1, 2, 1)), control, np.zeros((1, 1)), np.zeros((1, 1)), np.zeros((1, 0)), n_samples,
+            sample_steps, out,
             np.zeros((1, S.N_ACC)), np.zeros((1, S.N_CACC, 1)), np.full(1, -1, dtype=np.int64))
     return out[0, :, S.O_XMEAN], control[0], steps[0]
 

@@ -37,9 +37,13 @@ def test_fit_recovers_planted_prony_terms(tmp_path, planted):
     fit = fit_master_curve(_write(tmp_path / "m.csv", E_inf, E, tau), T_ref=20.0)
     # the planted times lie on the fit's decade grid: each is found with its modulus (measured: within
     # 0.6 %), and the terms between them carry almost nothing (measured: 3e-5 of E_0)
-    got = dict(zip(np.round(np.log10(fit.tau), 6), fit.E))
+    # (matched to 1e-4 decades, not by rounding: the fitted times differ from the decades in the 6th digit
+    # on some CPUs, e.g. 10**-7.00000123)
+    got = dict(zip(np.log10(fit.tau), fit.E))
     for t, e in zip(tau, E):
-        assert got.pop(round(np.log10(t), 6)) == pytest.approx(e, rel=2e-2)
+        near = min(got, key=lambda lt: abs(lt - np.log10(t)))
+        assert abs(near - np.log10(t)) < 1e-4
+        assert got.pop(near) == pytest.approx(e, rel=2e-2)
     assert sum(got.values()) < 1e-4 * (E_inf + sum(E))
     assert fit.E_inf == pytest.approx(E_inf, rel=1e-2)
     assert fit.err_storage < 1e-2 and fit.err_loss < 1e-2
