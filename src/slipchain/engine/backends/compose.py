@@ -155,14 +155,17 @@ def implicit_stepper(explicit, commit):
         top = int(ctrl[CTRL_TOP_IMPLICIT])
         n = xr.size
         while True:
-            want = min(cr[CT_LEVEL], top)  # the controller's level; the time grid may allow less (the sample's end)
-            lv = _grid_level(want, j, sample_steps)
-            if lv <= top_explicit < want:  # the sample's last base steps: explicit, the controller's level kept
-                cr[CT_LEVEL] = lv
+            want = min(cr[CT_LEVEL], top)  # the controller's level
+            # an implicit step needs no time grid (it has no folds per level): any whole number of base steps up to
+            # dt 2**want that ends within the sample; the sample's last few base steps are explicit
+            w = min(1 << want, sample_steps - j)
+            if want > top_explicit and w <= (1 << top_explicit):
+                cr[CT_LEVEL] = top_explicit
                 res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
                             sample_steps, rc, scratch)
-                cr[CT_LEVEL] = want
+                cr[CT_LEVEL] = want  # (the controller's level kept for the next sample)
                 return res
+            lv = want
             if lv <= top_explicit:
                 was = cr[CT_LEVEL]
                 res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
@@ -174,7 +177,7 @@ def implicit_stepper(explicit, commit):
                         and ctrl[CTRL_ERR] < STEP_UP * tol and implicit.rising(nc, ys)):
                     cr[CT_LEVEL] = top_explicit + 1
                 return res
-            w = 1 << lv
+            cut = w < (1 << lv)  # cut short by the sample's end
             h = dt0 * w
             t1 = (nstep + w) * dt0
             its = implicit.be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, ra, rk, ap, cr[CT_HAVE] > 0)
@@ -208,10 +211,10 @@ def implicit_stepper(explicit, commit):
             ctrl[2] += 1.0
             ctrl[CTRL_ERR] = err
             # up while both the error and the energy residual (~ h) leave room for a doubling
-            if cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale and lv < top:
-                lv = max(lv + 1, want)  # (a step the grid cut short keeps the controller's level)
-            elif lv < want:  # cut short by the grid, and no room to grow: the level this step could take
+            if cut:  # a step cut short says nothing about the next full one: the level is kept
                 pass
+            elif cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale and lv < top:
+                lv += 1
             elif lv < top_explicit + MIN_GAIN:  # stuck within a few doublings of the explicit top: explicit is cheaper
                 lv = top_explicit
                 cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
