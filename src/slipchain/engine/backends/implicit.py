@@ -19,7 +19,7 @@ A = M + h C + h**2 K, by Newton's method: per iteration one solve with the Jacob
 diag(f'), a cyclic block-tridiagonal matrix (2 x 2 blocks, one per (x_i, X_i) pair) solved in O(N)
 by :func:`solve_cyclic` (block Thomas elimination with a rank-2 Sherman-Morrison-Woodbury
 correction for the periodic corner; compiled into the loop, so no per-step Python: scipy's banded
-solvers cannot be called from it; tests/engine/test_implicit.py checks it against
+solvers cannot be called from it; tests/physics/test_implicit.py checks it against
 ``scipy.linalg.solve``). Each contact's velocity is updated as the fold scheme's scalar solver does,
 in y = log10(|u|/v*) (the law is smooth in y, not in u), at most MAX_DY decades per iteration.
 
@@ -30,6 +30,9 @@ step that leaves the rising branch, or whose error estimate exceeds the toleranc
 and the level falls (to the explicit top at most, where the adaptive step with its fold-aware
 contacts resolves the slip event on fine steps). The level rises above the explicit top after an
 accepted step whose error is below STEP_UP * tol while every contact is on the rising branch.
+An implicit step takes any whole number of base steps up to dt 2**level that ends within the
+output sample (it has no folds per level, so no time grid); the level, the error memory and the
+back-off go on from one sample to the next (``Batch.carry``, checkpointed).
 
 **Error and stability.** The error estimate is the adaptive step's (h/2 max |a^n - a^(n-1)|,
 :func:`.adaptive._error`), so ``step_tol`` means the same for both. Backward Euler is L-stable for
