@@ -137,6 +137,14 @@ def adaptive_stepper(explicit, commit):
     return step
 
 
+@nb.njit(cache=True)
+def _back_off(cr):
+    """Back from backward Euler to the explicit steps: wait twice as many explicit steps as last time
+    (1, 2, 4, ... at most MAX_BACKOFF) before the next implicit try."""
+    cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
+    cr[CT_WAIT] = cr[CT_BACKOFF]
+
+
 def implicit_stepper(explicit, commit):
     """integrator = 'implicit' (issue 27, :mod:`.implicit`): the adaptive step up to its top level
     (``control[1]``, the explicit springs' stable step), backward Euler with everything implicit on
@@ -199,8 +207,7 @@ def implicit_stepper(explicit, commit):
                 else:
                     cr[CT_LEVEL] = lv - 1
                 if cr[CT_LEVEL] == top_explicit:  # back to the explicit steps: wait longer before each new try
-                    cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
-                    cr[CT_WAIT] = cr[CT_BACKOFF]
+                    _back_off(cr)
                 continue
             if lv >= top_explicit + MIN_GAIN:
                 cr[CT_BACKOFF] = 0
@@ -217,8 +224,7 @@ def implicit_stepper(explicit, commit):
                 lv += 1
             elif lv < top_explicit + MIN_GAIN:  # stuck within a few doublings of the explicit top: explicit is cheaper
                 lv = top_explicit
-                cr[CT_BACKOFF] = min(max(1, 2 * cr[CT_BACKOFF]), MAX_BACKOFF)
-                cr[CT_WAIT] = cr[CT_BACKOFF]
+                _back_off(cr)
             cr[CT_LEVEL] = lv
             cr[CT_HAVE] = 1
             return w, fsum / n * w, w_contact, w_damp, w_drive, 0.0
