@@ -145,11 +145,84 @@ def _back_off(cr):
     cr[CT_WAIT] = cr[CT_BACKOFF]
 
 
+# what :func:`implicit_plan` says the next step is: explicit at the top level (the sample's last few base steps),
+# explicit (the adaptive step's levels), or a backward-Euler try
+PLAN_TAIL, PLAN_EXPLICIT, PLAN_IMPLICIT = 0, 1, 2
+
+
+@nb.njit(cache=True)
+def implicit_plan(cr, ctrl, j, sample_steps):
+    """The implicit stepper's next step (:mod:`.implicit`): (what, level, base steps). An implicit step
+    needs no time grid (it has no folds per level): any whole number of base steps up to dt 2**level
+    that ends within the sample; the sample's last few base steps are explicit (PLAN_TAIL)."""
+    top_explicit = int(ctrl[1])
+    want = min(cr[CT_LEVEL], int(ctrl[CTRL_TOP_IMPLICIT]))  # the controller's level
+    w = min(1 << want, sample_steps - j)
+    if want > top_explicit and w <= (1 << top_explicit):
+        return PLAN_TAIL, want, w
+    if want <= top_explicit:
+        return PLAN_EXPLICIT, want, w
+    return PLAN_IMPLICIT, want, w
+
+
+@nb.njit(cache=True)
+def after_explicit(cr, ctrl, was, nc, ys):
+    """After an explicit step at the adaptive levels: count down the back-off, or, at the explicit top
+    with a small error and every contact on the rising branch, let the next step be implicit."""
+    top_explicit = int(ctrl[1])
+    if cr[CT_WAIT] > 0:
+        cr[CT_WAIT] -= 1
+    elif (int(ctrl[CTRL_TOP_IMPLICIT]) > top_explicit and was >= top_explicit and cr[CT_LEVEL] == top_explicit
+            and ctrl[CTRL_ERR] < STEP_UP * ctrl[0] and implicit.rising(nc, ys)):
+        cr[CT_LEVEL] = top_explicit + 1
+
+
+@nb.njit(cache=True)
+def implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
+    """A backward-Euler try of level ``lv`` (``its`` Newton iterations, -1: not takeable; error
+    estimate ``err``; energy residual ``bal`` of works ``scale``): True where it is accepted, with the
+    controller's next level set; False where rejected, the level lowered (to the explicit top at
+    most, where a failed try backs off)."""
+    tol = ctrl[0]
+    top_explicit = int(ctrl[1])
+    if its < 0 or err > tol or abs(bal) > implicit.ENERGY_TOL * scale:
+        # rejected: finer (down to the explicit top, the adaptive step's levels); an energy residual
+        # (numerical dissipation, ~ h) one level down
+        ctrl[3] += 1.0
+        if its < 0:
+            cr[CT_LEVEL] = top_explicit
+        elif err > tol:
+            cr[CT_LEVEL] = max(min(_rejected_level(lv, err, tol), lv - 1), top_explicit)
+        else:
+            cr[CT_LEVEL] = lv - 1
+        if cr[CT_LEVEL] == top_explicit:  # back to the explicit steps: wait longer before each new try
+            _back_off(cr)
+        return False
+    if lv >= top_explicit + MIN_GAIN:
+        cr[CT_BACKOFF] = 0
+    ctrl[2] += 1.0
+    ctrl[CTRL_ERR] = err
+    # up while both the error and the energy residual (~ h) leave room for a doubling
+    if cut:  # a step cut short says nothing about the next full one: the level is kept
+        pass
+    elif cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale \
+            and lv < int(ctrl[CTRL_TOP_IMPLICIT]):
+        lv += 1
+    elif lv < top_explicit + MIN_GAIN:  # stuck within a few doublings of the explicit top: explicit is cheaper
+        lv = top_explicit
+        _back_off(cr)
+    cr[CT_LEVEL] = lv
+    cr[CT_HAVE] = 1
+    return True
+
+
 def implicit_stepper(explicit, commit):
     """integrator = 'implicit' (issue 27, :mod:`.implicit`): the adaptive step up to its top level
     (``control[1]``, the explicit springs' stable step), backward Euler with everything implicit on
     the levels above it (up to ``control[4]``) while every contact is on the rising branch of eq. (1).
-    Composed with the chain's body (its explicit part and commit serve the adaptive levels)."""
+    Composed with the chain's body (its explicit part and commit serve the adaptive levels); the
+    controller (:func:`implicit_plan`, :func:`after_explicit`, :func:`implicit_verdict`) is shared with
+    the slab's (:func:`spectral_implicit_advance`)."""
     astep = adaptive_stepper(explicit, commit)
 
     @nb.njit(cache=True, inline="always")
@@ -160,30 +233,20 @@ def implicit_stepper(explicit, commit):
         slow = rc[14]
         tol = ctrl[0]
         top_explicit = int(ctrl[1])
-        top = int(ctrl[CTRL_TOP_IMPLICIT])
         n = xr.size
         while True:
-            want = min(cr[CT_LEVEL], top)  # the controller's level
-            # an implicit step needs no time grid (it has no folds per level): any whole number of base steps up to
-            # dt 2**want that ends within the sample; the sample's last few base steps are explicit
-            w = min(1 << want, sample_steps - j)
-            if want > top_explicit and w <= (1 << top_explicit):
+            what, lv, w = implicit_plan(cr, ctrl, j, sample_steps)
+            if what == PLAN_TAIL:
                 cr[CT_LEVEL] = top_explicit
                 res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
                             sample_steps, rc, scratch)
-                cr[CT_LEVEL] = want  # (the controller's level kept for the next sample)
+                cr[CT_LEVEL] = lv  # (the controller's level kept for the next sample)
                 return res
-            lv = want
-            if lv <= top_explicit:
+            if what == PLAN_EXPLICIT:
                 was = cr[CT_LEVEL]
                 res = astep(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep,
                             sample_steps, rc, scratch)
-                # at the explicit top with a small error: the next step may be implicit (unless waiting)
-                if cr[CT_WAIT] > 0:
-                    cr[CT_WAIT] -= 1
-                elif (top > top_explicit and was >= top_explicit and cr[CT_LEVEL] == top_explicit
-                        and ctrl[CTRL_ERR] < STEP_UP * tol and implicit.rising(nc, ys)):
-                    cr[CT_LEVEL] = top_explicit + 1
+                after_explicit(cr, ctrl, was, nc, ys)
                 return res
             cut = w < (1 << lv)  # cut short by the sample's end
             h = dt0 * w
@@ -196,37 +259,12 @@ def implicit_stepper(explicit, commit):
             if its > 0 and err <= tol:  # the works by the trapezoidal rule, and the step's energy residual
                 bal, scale, fsum, w_drive, w_damp, w_contact = implicit.step_balance(p, xr, ur, Xr, Ur, un, Un, h, t1,
                                                                                      nc, st, vs, dampx, dampX)
-            if its < 0 or err > tol or abs(bal) > implicit.ENERGY_TOL * scale:
-                # rejected: finer (down to the explicit top, the adaptive step's levels); an energy residual
-                # (numerical dissipation, ~ h) one level down
-                ctrl[3] += 1.0
-                if its < 0:
-                    cr[CT_LEVEL] = top_explicit
-                elif err > tol:
-                    cr[CT_LEVEL] = max(min(_rejected_level(lv, err, tol), lv - 1), top_explicit)
-                else:
-                    cr[CT_LEVEL] = lv - 1
-                if cr[CT_LEVEL] == top_explicit:  # back to the explicit steps: wait longer before each new try
-                    _back_off(cr)
+            if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
                 continue
-            if lv >= top_explicit + MIN_GAIN:
-                cr[CT_BACKOFF] = 0
             _keep_acceleration(n, ur, Ur, un, Un, ap, h)
             implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
             _weighted_contact_sums(nc, fk, uk, ca, slow, w)  # the contacts' statistics (at the step's end)
             commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
-            ctrl[2] += 1.0
-            ctrl[CTRL_ERR] = err
-            # up while both the error and the energy residual (~ h) leave room for a doubling
-            if cut:  # a step cut short says nothing about the next full one: the level is kept
-                pass
-            elif cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale and lv < top:
-                lv += 1
-            elif lv < top_explicit + MIN_GAIN:  # stuck within a few doublings of the explicit top: explicit is cheaper
-                lv = top_explicit
-                _back_off(cr)
-            cr[CT_LEVEL] = lv
-            cr[CT_HAVE] = 1
             return w, fsum / n * w, w_contact, w_damp, w_drive, 0.0
 
     return step

@@ -205,36 +205,25 @@ def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, ha
         rhs[2 * i + 1] = mL * Ur[i] + h * fX
         un[i] = ur[i] + h * ap[i] if have else ur[i]
         Un[i] = Ur[i] + h * ap[n + i] if have else Ur[i]
-    for k in range(nc):
-        u0 = ur[st[k]]
-        sk[k] = 1.0 if u0 >= 0.0 else -1.0
-        yk[k] = ys[Y_LOG, k]
-        if not yk[k] < Y_MAX:
-            return -1
-        ug = un[st[k]]
-        if ug * sk[k] > 0.0:
-            yk[k] = min(math.log10(abs(ug) / vs[k]), Y_MAX)
+    if not start_contacts(nc, st, ur, un, ys, vs, yk, sk):
+        return -1
     diag = np.empty(n)
     res = np.empty(2 * n)
     dv = np.empty(2 * n)
     hf = np.zeros(n)  # h f(u) on the contact blocks
+    dk = np.empty(nc)  # h f'(u) of each contact
     free = np.ones(n, dtype=np.bool_)  # blocks without a contact
     pk = np.empty(nc)  # 10**y and exp(-c y**2) of each contact, updated multiplicatively (as newton_pass)
     qk = np.empty(nc)
     for k in range(nc):
         free[st[k]] = False
-        pk[k] = math.exp(LN10 * yk[k])
-        qk[k] = math.exp(-c * yk[k] * yk[k])
+    factors(nc, c, yk, pk, qk)
     for it in range(NEWTON_MAX):
         for i in range(n):
             diag[i] = a0
+        eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk)
         for k in range(nc):
-            i = st[k]
-            u = sk[k] * vs[k] * pk[k]
-            big = amp * qk[k]
-            un[i] = u
-            hf[i] = h * (sk[k] * big + meta_c * u)
-            diag[i] = a0 + h * (meta_c + big * (-2.0 * c * yk[k]) / (LN10 * vs[k] * pk[k]))
+            diag[st[k]] = a0 + dk[k]
         _residual(n, a0, bb, d0, ox, oX, un, Un, hf, rhs, res)
         solve_cyclic(diag, bb, d0, ox, oX, res, dv)
         big_v = 0.0
@@ -242,34 +231,90 @@ def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, ha
             big_v = max(big_v, abs(dv[2 * i + 1]), abs(dv[2 * i]) if free[i] else 0.0)
             un[i] += dv[2 * i]  # contact blocks: overwritten from (y, s) below
             Un[i] += dv[2 * i + 1]
-        big_y = 0.0
-        for k in range(nc):
-            u = sk[k] * vs[k] * pk[k]
-            du = dv[2 * st[k]]
-            if (u + du) * sk[k] <= 0.0:  # the update crosses zero: the new sign, additively
-                sk[k] = -sk[k]
-                w = abs(u + du)
-                yk[k] = max(math.log10(w / vs[k]), Y_FLOOR) if w > 0.0 else Y_FLOOR
-                pk[k] = math.exp(LN10 * yk[k])
-                qk[k] = math.exp(-c * yk[k] * yk[k])
-                big_y = max(big_y, 1.0)
-            else:  # Newton in y (the fold scheme's variable)
-                d = min(MAX_DY, max(-MAX_DY, du / (LN10 * u)))
-                if yk[k] + d < Y_FLOOR:
-                    d = Y_FLOOR - yk[k]
-                pk[k] = scaled_exp(pk[k], LN10 * d)
-                qk[k] = scaled_exp(qk[k], -c * d * (2.0 * yk[k] + d))
-                yk[k] += d
-                big_y = max(big_y, abs(d))
-            if yk[k] > Y_ABORT:
-                return -1
+        big_y = update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, 2)
+        if big_y < 0.0:
+            return -1
         if big_y < NEWTON_DY and big_v < NEWTON_DV * tol:
-            for k in range(nc):
-                if not yk[k] < Y_MAX:
-                    return -1
-                un[st[k]] = sk[k] * vs[k] * pk[k]
-            return it + 1
+            return it + 1 if finish_contacts(nc, st, vs, yk, sk, pk, un) else -1
     return -1
+
+
+@nb.njit(cache=True)
+def start_contacts(nc, st, ur, un, ys, vs, yk, sk):
+    """Newton's start for the contacts of a backward-Euler step: each contact's sign from its velocity
+    at the step's start and its y from the solver state, or from the extrapolated velocity in ``un``
+    where that keeps the sign (at most Y_MAX). False where a contact is not on the rising branch."""
+    for k in range(nc):
+        u0 = ur[st[k]]
+        sk[k] = 1.0 if u0 >= 0.0 else -1.0
+        yk[k] = ys[Y_LOG, k]
+        if not yk[k] < Y_MAX:
+            return False
+        ug = un[st[k]]
+        if ug * sk[k] > 0.0:
+            yk[k] = min(math.log10(abs(ug) / vs[k]), Y_MAX)
+    return True
+
+
+@nb.njit(cache=True)
+def factors(nc, c, yk, pk, qk):
+    """10**y and exp(-c y**2) of each contact, exact."""
+    for k in range(nc):
+        pk[k] = math.exp(LN10 * yk[k])
+        qk[k] = math.exp(-c * yk[k] * yk[k])
+
+
+@nb.njit(cache=True)
+def eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk):
+    """Each contact's velocity (into ``un``), h f(u) (into ``hf`` at its block) and h f'(u) (``dk``),
+    from its (y, sign): eq. (1) with the damping m eta_c u."""
+    for k in range(nc):
+        i = st[k]
+        u = sk[k] * vs[k] * pk[k]
+        big = amp * qk[k]
+        un[i] = u
+        hf[i] = h * (sk[k] * big + meta_c * u)
+        dk[k] = h * (meta_c + big * (-2.0 * c * yk[k]) / (LN10 * vs[k] * pk[k]))
+
+
+@nb.njit(cache=True)
+def update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, stride):
+    """A Newton update of the contacts from the velocity updates ``dv`` (block i's at dv[stride i]):
+    in y (the fold scheme's variable, at most MAX_DY decades), or, where it crosses zero, to the new
+    sign additively. Returns the largest change of y, or -1 where a contact leaves the rising branch
+    (y > Y_ABORT: backward Euler may not be taken)."""
+    big_y = 0.0
+    for k in range(nc):
+        u = sk[k] * vs[k] * pk[k]
+        du = dv[stride * st[k]]
+        if (u + du) * sk[k] <= 0.0:  # the update crosses zero: the new sign, additively
+            sk[k] = -sk[k]
+            w = abs(u + du)
+            yk[k] = max(math.log10(w / vs[k]), Y_FLOOR) if w > 0.0 else Y_FLOOR
+            pk[k] = math.exp(LN10 * yk[k])
+            qk[k] = math.exp(-c * yk[k] * yk[k])
+            big_y = max(big_y, 1.0)
+        else:  # Newton in y (the fold scheme's variable)
+            d = min(MAX_DY, max(-MAX_DY, du / (LN10 * u)))
+            if yk[k] + d < Y_FLOOR:
+                d = Y_FLOOR - yk[k]
+            pk[k] = scaled_exp(pk[k], LN10 * d)
+            qk[k] = scaled_exp(qk[k], -c * d * (2.0 * yk[k] + d))
+            yk[k] += d
+            big_y = max(big_y, abs(d))
+        if yk[k] > Y_ABORT:
+            return -1.0
+    return big_y
+
+
+@nb.njit(cache=True)
+def finish_contacts(nc, st, vs, yk, sk, pk, un):
+    """Newton converged: each contact's velocity into ``un``; False where one is not below Y_MAX."""
+    for k in range(nc):
+        if not yk[k] < Y_MAX:
+            return False
+        un[st[k]] = sk[k] * vs[k] * pk[k]
+    return True
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -392,6 +437,126 @@ def drive_force_sum(p, Xr, t):
     return p[P_KD] * (Xr.size * p[P_VD] * t - sx)
 
 
-__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Y_MAX", "be_contacts", "be_try", "chain_coefficients", "chain_damping", "contact_power_at",
+
+
+# --- The slab and half-space (issue 27): the same backward Euler, the elastic operator diagonal in Fourier space ---
+
+CG_RTOL = 1e-9  # the Newton iteration's linear solve: relative residual of the preconditioned conjugate gradients
+CG_MAXITER = 200
+
+
+class SpectralOperator:
+    """The elastic operator of one row of a slab or half-space, L x = IFFT[a**2 k(q) FFT(x)]
+    (``kern`` = a**2 k on the rfft2 grid, :class:`.base.Batch`), and what backward Euler needs of it.
+
+    Under the spring drive the blocks' backward-Euler velocities u' solve (module docstring, with the
+    body's force -L (x' - v_d t) and the radiation damping -m gamma (u - v_d) in place of the springs)
+
+        A u' + h f(u') = m u + h (-L x + a**2 k(0) v_d t' + m gamma v_d),   A = (m + h m gamma) I + h**2 L,
+
+    A diagonal in Fourier space (eigenvalues m + h m gamma + h**2 a**2 k(q) > 0). Newton's Jacobian
+    A + h diag(f') is symmetric positive definite on the rising branch; it is solved by scipy's
+    conjugate gradients, preconditioned by its diagonal (Jacobi: m + h m gamma + h**2 L_ii + h f'_i,
+    L_ii the mean of a**2 k(q) over the grid). Where a contact's h f' dominates (creep at large h:
+    h f' ~ 10 against h**2 a**2 k ~ 1e-3 at h = 1 ms, epsilon = 1) that is nearly the inverse; where
+    no contact does, the preconditioned spectrum lies within k(q)/L_ii, so the iterations stay few
+    either way (docs/numerics.md, "The implicit stepper")."""
+
+    def __init__(self, kern: np.ndarray, shape: tuple[int, int], fft):
+        self.kern = kern
+        self.shape = shape
+        self.fft = fft
+        self.n = shape[0] * shape[1]
+        self.k0 = float(kern[0, 0])
+        delta = np.zeros(self.n)
+        delta[0] = 1.0
+        self.lii = float(self.apply(delta)[0])  # the diagonal of the circulant L
+
+    def apply(self, v: np.ndarray) -> np.ndarray:
+        """L v: one rfft2/irfft2 pair."""
+        f = self.fft
+        return f.irfft2(self.kern * f.rfft2(v.reshape(self.shape)), s=self.shape).reshape(self.n)
+
+    def energy(self, x: np.ndarray, lx: np.ndarray, d: float) -> float:
+        """(1/2) (x - d) . L (x - d), given L x (the uniform shift d of the drive enters mode q = 0 alone)."""
+        return 0.5 * float(np.dot(x - d, lx - self.k0 * d))
+
+
+def spectral_be_try(p, op: SpectralOperator, xr, ur, st, vs, nc, ys, un, h, t1, tol, yk, sk, ap, have):
+    """One backward-Euler step of a slab or half-space row under the spring drive (:class:`SpectralOperator`)
+    from (x, u) at time t1 - h: writes the new velocities into ``un`` and each contact's (y, sign)
+    into ``yk``, ``sk``, touching nothing else; Newton as :func:`be_try` (the same contact pieces),
+    each linear solve by preconditioned conjugate gradients. Returns (Newton iterations or -1 where
+    the step may not be taken by backward Euler, L x, conjugate-gradient iterations)."""
+    from scipy.sparse.linalg import LinearOperator, cg
+
+    n = xr.size
+    m, meta, vd = p[P_M], p[P_META], p[P_VD]
+    amp, c, meta_c = p[P_AMP], p[P_C], m * p[P_ETAC]
+    cdiag = m + h * meta
+    h2 = h * h
+    lx = op.apply(xr)
+    rhs = m * ur + h * (op.k0 * vd * t1 + meta * vd) - h * lx
+    un[:] = ur + h * ap[:n] if have else ur
+    if not start_contacts(nc, st, ur, un, ys, vs, yk, sk):
+        return -1, lx, 0
+    hf = np.zeros(n)
+    dk = np.empty(nc)
+    pk = np.empty(nc)
+    qk = np.empty(nc)
+    free = np.ones(n, dtype=bool)
+    free[st[:nc]] = False
+    factors(nc, c, yk, pk, qk)
+    jd = np.zeros(n)  # h f' on the contact blocks
+    sites = st[:nc]
+    cg_its = [0]
+
+    def count(_):
+        cg_its[0] += 1
+
+    jac = LinearOperator((n, n), matvec=lambda v: cdiag * v + h2 * op.apply(v) + jd * v, dtype=float)
+    for it in range(NEWTON_MAX):
+        eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk)
+        jd[sites] = dk
+        res = rhs - (cdiag * un + h2 * op.apply(un) + hf)
+        pre = 1.0 / (cdiag + h2 * op.lii + jd)
+        dv, info = cg(jac, res, rtol=CG_RTOL, atol=0.0, maxiter=CG_MAXITER,
+                      M=LinearOperator((n, n), matvec=lambda r: pre * r, dtype=float), callback=count)
+        if info != 0:
+            return -1, lx, cg_its[0]
+        big_v = float(np.max(np.abs(dv[free]))) if n > nc else 0.0
+        un += dv  # contact blocks: overwritten from (y, s) below
+        big_y = update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, 1)
+        if big_y < 0.0:
+            return -1, lx, cg_its[0]
+        if big_y < NEWTON_DY and big_v < NEWTON_DV * tol:
+            return (it + 1 if finish_contacts(nc, st, vs, yk, sk, pk, un) else -1), lx, cg_its[0]
+    return -1, lx, cg_its[0]
+
+
+def spectral_step_balance(p, op: SpectralOperator, xr, ur, un, lx, h, t1, nc, st, vs):
+    """A slab row's backward-Euler step: works by the trapezoidal rule and the energy residual
+    (as :func:`step_balance`; the energy is the kinetic one and the body's, (1/2) (x - v_d t) . L (x - v_d t),
+    given L x at the step's start); returns (residual, sum of the works' magnitudes, mean drive force
+    sum, drive work, damping work, contact work)."""
+    n = xr.size
+    m, meta, vd, kd0 = p[P_M], p[P_META], p[P_VD], op.k0
+    amp, c, meta_c = p[P_AMP], p[P_C], m * p[P_ETAC]
+    t0 = t1 - h
+    x1 = xr + h * un
+    lx1 = lx + h * op.apply(un)
+    e0 = 0.5 * m * float(np.dot(ur, ur)) + op.energy(xr, lx, vd * t0)
+    e1 = 0.5 * m * float(np.dot(un, un)) + op.energy(x1, lx1, vd * t1)
+    f0 = kd0 * (n * vd * t0 - float(np.sum(xr)))
+    f1 = kd0 * (n * vd * t1 - float(np.sum(x1)))
+    fsum = 0.5 * (f0 + f1)
+    w_drive = fsum * vd * h
+    w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
+    w_contact = 0.5 * (contact_power_at(nc, st, vs, ur, amp, c, meta_c) + contact_power_at(nc, st, vs, un, amp, c, meta_c)) * h
+    bal = (e1 - e0) - (w_drive + w_damp - w_contact)
+    return bal, abs(w_drive) + abs(w_damp) + abs(w_contact), fsum, w_drive, w_damp, w_contact
+
+
+__all__ = ["ENERGY_TOL", "NEWTON_MAX", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "spectral_be_try", "spectral_step_balance", "chain_coefficients", "chain_damping", "contact_power_at",
            "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
            "step_balance"]
