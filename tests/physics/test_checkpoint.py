@@ -66,6 +66,9 @@ CASES = {
     # issue 27: the implicit stepper (backward Euler above the explicit levels) through an event and creep
     "implicit": dict(N=31, theta=1.0, integrator="implicit", dt=1e-7, epsilon=1.0, start="steady", t_total=0.05,
                      output_interval=1e-3, seed=3),
+    # ... and on the slab (Newton with conjugate gradients; its controller carried across samples and chunks)
+    "implicit slab": dict(N=8, Ly=8, geometry="slab", theta=1.0, integrator="implicit", dt=1e-7, epsilon=1.0,
+                          start="steady", t_total=0.03, output_interval=1e-3, seed=3),
 }
 SAVES = {"dead weight, automatic length": 60}
 

@@ -51,8 +51,8 @@ import numba as nb
 import numpy as np
 
 from ...model.geometries import GEOMETRIES
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_ETAC,
-                      P_FOLD, P_KD, P_M, P_VD)
+from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_DT,
+                      P_ETAC, P_FOLD, P_KD, P_M, P_SLOW, P_VD)
 from . import implicit, spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
@@ -462,6 +462,89 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     return ChunkOutput(out, acc, cacc)
 
 
+def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
+    """integrator = 'implicit' on the slab and half-space (issue 27; spring drive, material 'elastic'):
+    row after row, each step as the implicit stepper's controller says (:func:`implicit_plan`, shared
+    with the chains): explicit steps by the slab's compiled adaptive step on this row alone (one FFT
+    each), backward-Euler tries by :func:`.implicit.spectral_be_try` (Newton, each linear solve by
+    preconditioned conjugate gradients, one FFT per iteration), judged by :func:`implicit_verdict`.
+    The level, error memory and back-off go on across samples (``Batch.carry``, as the chains')."""
+    if fft is None:
+        import scipy.fft as fft
+    b, n = batch.x.shape
+    shape = batch.shape
+    out, acc, cacc = _chunk_outputs(batch, n_samples)
+    fd = np.zeros(b)
+    _, folds, control = _stepper_inputs(batch)
+    step_rows = loop(batch.geometry, True)  # the explicit levels: the slab's adaptive step
+    ctl = np.zeros((b, N_CT), dtype=np.int64)
+    aprev = np.zeros((b, 2 * n))
+    scratch = scratch_arrays(n, batch.sites.shape[1])
+    un, Un, dampx, dampX, rk, ra, uk, fk, _, _ = scratch
+    k0 = np.ascontiguousarray(batch.kernel[:, 0, 0])
+    carry = batch.carry
+    for row in np.flatnonzero(batch.status < 0):
+        if batch.params[row, P_KD] == 0.0:
+            raise ValueError("integrator = 'implicit' on the slab runs with the spring drive only in this version")
+        r = slice(row, row + 1)
+        p = batch.params[row]
+        op = implicit.SpectralOperator(batch.kernel[row], shape, fft)
+        xr, ur, Xr, Ur = batch.x[row], batch.u[row], batch.X[row], batch.U[row]
+        st, vs, nc, ys = batch.sites[row], batch.vstar[row], int(batch.n_contacts[row]), batch.ysolve[row]
+        ctrl, cr, ap, ca = control[row], ctl[row], aprev[row], cacc[row]
+        dt0, slow = p[P_DT], p[P_SLOW]
+        ap[:] = carry[row, N_CARRY:]
+        rows = (k0[r], batch.x[r], batch.u[r], batch.X[r], batch.U[r], batch.step[r], batch.params[r], batch.sites[r],
+                batch.vstar[r], batch.n_contacts[r], batch.ysolve[r], folds[r], control[r], batch.bstate[r],
+                batch.material[r], ctl[r], aprev[r], cacc[r], acc[r], fd[r])
+        for s in range(n_samples):
+            start_sample(row, batch.n_contacts, batch.ysolve, batch.params, ctl)
+            _restore_carry(carry[row], cr)
+            while cr[CT_J] < sample_steps:
+                what, lv, w = implicit_plan(cr, ctrl, cr[CT_J], sample_steps)
+                if what != PLAN_IMPLICIT:
+                    was = cr[CT_LEVEL]
+                    if what == PLAN_TAIL:
+                        cr[CT_LEVEL] = ctrl[1]
+                    force = -op.apply(xr)[None, :]
+                    step_rows(force, *rows[:20], sample_steps, batch.status[r], scratch)
+                    if what == PLAN_TAIL:
+                        cr[CT_LEVEL] = lv
+                    else:
+                        after_explicit(cr, ctrl, was, nc, ys)
+                    continue
+                h = dt0 * w
+                t1 = (batch.step[row] + w) * dt0
+                its, lx, _ = implicit.spectral_be_try(p, op, xr, ur, st, vs, nc, ys, un, h, t1, ctrl[0], ra, rk, ap,
+                                                      cr[CT_HAVE] > 0)
+                Un[:] = Ur  # no upper layer (the spring drive): zero
+                err = _error(n, ur, Ur, un, Un, ap, h) if its > 0 and cr[CT_HAVE] > 0 else 0.0
+                bal = scale = fsum = w_drive = w_damp = w_contact = 0.0
+                if its > 0 and err <= ctrl[0]:
+                    bal, scale, fsum, w_drive, w_damp, w_contact = implicit.spectral_step_balance(
+                        p, op, xr, ur, un, lx, h, t1, nc, st, vs)
+                if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
+                    continue
+                _keep_acceleration(n, ur, Ur, un, Un, ap, h)
+                implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
+                _weighted_contact_sums(nc, fk, uk, ca, slow, w)
+                spectral.body_commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+                acc[row, A_WCONTACT] -= w_contact
+                acc[row, A_WDAMP] += w_damp
+                acc[row, A_WDRIVE] += w_drive
+                fd[row] += fsum / n * w
+                batch.step[row] += w
+                cr[CT_J] += w
+            _save_carry(carry[row], cr)
+            # the sample's end for this row (the others' samples are zero here and done in their turn)
+            spectral.end_sample(batch.x[r], batch.X[r], batch.status[r], batch.step[r], fd[r], out[r], s, sample_steps,
+                                acc[r])
+            if batch.status[row] >= 0:
+                break
+        carry[row, N_CARRY:] = ap
+    return ChunkOutput(out, acc, cacc)
+
+
 def kernel_advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
     """Advance every live row of a chains' batch by n_samples*sample_steps steps: one call of the
     composed whole-chunk kernel (:func:`kernel_driver`)."""
@@ -478,6 +561,8 @@ def advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
     """Advance a batch on the CPU by the driver of its geometry's body: :func:`kernel_advance` (the
     chains) or :func:`fft_advance` (the slab and half-space: the elastic force by FFT)."""
     if BODIES[batch.geometry] == "spectral":
+        if batch.implicit:
+            return spectral_implicit_advance(batch, n_samples, sample_steps)
         return fft_advance(batch, n_samples, sample_steps)
     return kernel_advance(batch, n_samples, sample_steps)
 
