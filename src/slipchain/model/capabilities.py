@@ -38,9 +38,6 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
         if geometry == "chain2d":
             return ("integrator = 'implicit' does not run on the chain2d in this version (its backward Euler solves the "
                     "chain's cyclic banded system or the slab's Fourier-diagonal one; use integrator = 'adaptive')")
-        if _GEOMETRIES[geometry].spectral and drive == "dead_weight":
-            return (f"integrator = 'implicit' runs on the {geometry} with the spring drive only in this version (the "
-                    "plate of the dead weight is not in its implicit system; use integrator = 'adaptive')")
         if material != "elastic":
             return ("integrator = 'implicit' runs with material = 'elastic' only in this version (the Maxwell arms are "
                     "not in its implicit system; use integrator = 'fold')")

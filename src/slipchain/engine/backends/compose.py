@@ -463,7 +463,7 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
 
 
 def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
-    """integrator = 'implicit' on the slab and half-space (issue 27; spring drive, material 'elastic'):
+    """integrator = 'implicit' on the slab and half-space (issue 27; either drive, material 'elastic'):
     row after row, each step as the implicit stepper's controller says (:func:`implicit_plan`, shared
     with the chains): explicit steps by the slab's compiled adaptive step on this row alone (one FFT
     each), backward-Euler tries by :func:`.implicit.spectral_be_try` (Newton, each linear solve by
@@ -484,10 +484,9 @@ def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, f
     k0 = np.ascontiguousarray(batch.kernel[:, 0, 0])
     carry = batch.carry
     for row in np.flatnonzero(batch.status < 0):
-        if batch.params[row, P_KD] == 0.0:
-            raise ValueError("integrator = 'implicit' on the slab runs with the spring drive only in this version")
         r = slice(row, row + 1)
         p = batch.params[row]
+        dead = p[P_KD] == 0.0  # the dead weight: the body acts on x - X (the plate's displacement in every entry)
         op = implicit.SpectralOperator(batch.kernel[row], shape, fft)
         xr, ur, Xr, Ur = batch.x[row], batch.u[row], batch.X[row], batch.U[row]
         st, vs, nc, ys = batch.sites[row], batch.vstar[row], int(batch.n_contacts[row]), batch.ysolve[row]
@@ -506,7 +505,7 @@ def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, f
                     was = cr[CT_LEVEL]
                     if what == PLAN_TAIL:
                         cr[CT_LEVEL] = ctrl[1]
-                    force = -op.apply(xr)[None, :]
+                    force = -op.apply(xr - Xr if dead else xr)[None, :]
                     step_rows(force, *rows[:20], sample_steps, batch.status[r], scratch)
                     if what == PLAN_TAIL:
                         cr[CT_LEVEL] = lv
@@ -515,14 +514,13 @@ def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, f
                     continue
                 h = dt0 * w
                 t1 = (batch.step[row] + w) * dt0
-                its, lx, _ = implicit.spectral_be_try(p, op, xr, ur, st, vs, nc, ys, un, h, t1, ctrl[0], ra, rk, ap,
-                                                      cr[CT_HAVE] > 0)
-                Un[:] = Ur  # no upper layer (the spring drive): zero
+                its, lx, _ = implicit.spectral_be_try(p, op, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra,
+                                                      rk, ap, cr[CT_HAVE] > 0)
                 err = _error(n, ur, Ur, un, Un, ap, h) if its > 0 and cr[CT_HAVE] > 0 else 0.0
                 bal = scale = fsum = w_drive = w_damp = w_contact = 0.0
                 if its > 0 and err <= ctrl[0]:
                     bal, scale, fsum, w_drive, w_damp, w_contact = implicit.spectral_step_balance(
-                        p, op, xr, ur, un, lx, h, t1, nc, st, vs)
+                        p, op, xr, ur, Xr, Ur, un, Un, lx, h, t1, nc, st, vs)
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
                     continue
                 _keep_acceleration(n, ur, Ur, un, Un, ap, h)

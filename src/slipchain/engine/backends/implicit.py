@@ -478,26 +478,48 @@ class SpectralOperator:
         return f.irfft2(self.kern * f.rfft2(v.reshape(self.shape)), s=self.shape).reshape(self.n)
 
     def energy(self, x: np.ndarray, lx: np.ndarray, d: float) -> float:
-        """(1/2) (x - d) . L (x - d), given L x (the uniform shift d of the drive enters mode q = 0 alone)."""
+        """(1/2) (x - d) . L (x - d), given L x (a uniform shift d enters mode q = 0 alone)."""
         return 0.5 * float(np.dot(x - d, lx - self.k0 * d))
 
 
-def spectral_be_try(p, op: SpectralOperator, xr, ur, st, vs, nc, ys, un, h, t1, tol, yk, sk, ap, have):
-    """One backward-Euler step of a slab or half-space row under the spring drive (:class:`SpectralOperator`)
-    from (x, u) at time t1 - h: writes the new velocities into ``un`` and each contact's (y, sign)
-    into ``yk``, ``sk``, touching nothing else; Newton as :func:`be_try` (the same contact pieces),
-    each linear solve by preconditioned conjugate gradients. Returns (Newton iterations or -1 where
-    the step may not be taken by backward Euler, L x, conjugate-gradient iterations)."""
+def spectral_be_try(p, op: SpectralOperator, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
+    """One backward-Euler step of a slab or half-space row (:class:`SpectralOperator`) from (x, u, X, U)
+    at time t1 - h: writes the new velocities into ``un`` (and the plate's into every entry of ``Un``
+    under the dead weight; zero under the spring drive) and each contact's (y, sign) into ``yk``,
+    ``sk``, touching nothing else; Newton as :func:`be_try` (the same contact pieces), each linear
+    solve by preconditioned conjugate gradients. Returns (Newton iterations or -1 where the step may
+    not be taken by backward Euler, L (x - X) at the step's start, conjugate-gradient iterations).
+
+    Under the dead weight (P_KD = 0) the top is a rigid plate (velocity U', mass N_L m per block,
+    :mod:`.spectral`) and one more unknown: with b = h (h a**2 k_c(0) + m gamma),
+
+        A u' + h f(u') - b U' = m u + h (-L_c (x - X)),
+        n (N_L m + h m gamma + h**2 a**2 k_c(0)) U' - b sum u' = n (N_L m U + h (F_b + a**2 k_c(0) (<x> - X))),
+
+    the plate's row scaled by n so that the Jacobian stays symmetric (and positive definite: its
+    Schur complement on U' is positive); the conjugate gradients run on the n + 1 unknowns."""
     from scipy.sparse.linalg import LinearOperator, cg
 
     n = xr.size
     m, meta, vd = p[P_M], p[P_META], p[P_VD]
     amp, c, meta_c = p[P_AMP], p[P_C], m * p[P_ETAC]
+    dead = p[P_KD] == 0.0
+    k0 = op.k0
     cdiag = m + h * meta
     h2 = h * h
-    lx = op.apply(xr)
-    rhs = m * ur + h * (op.k0 * vd * t1 + meta * vd) - h * lx
+    if dead:
+        Xp, Up = float(Xr[0]), float(Ur[0])
+        lx = op.apply(xr - Xp)  # L_c (x - X): the plate's uniform displacement enters mode q = 0 alone
+        rhs = m * ur - h * lx
+        bp = h * (h * k0 + meta)
+        ap_ = p[P_ML] + h * meta + h2 * k0
+        rhs_p = n * (p[P_ML] * Up + h * (p[P_FCONST] + k0 * (float(np.mean(xr)) - Xp)))
+    else:
+        lx = op.apply(xr)
+        rhs = m * ur + h * (k0 * vd * t1 + meta * vd) - h * lx
+        bp = ap_ = rhs_p = 0.0
     un[:] = ur + h * ap[:n] if have else ur
+    Unew = (Up + h * ap[n]) if dead and have else (Up if dead else 0.0)
     if not start_contacts(nc, st, ur, un, ys, vs, yk, sk):
         return -1, lx, 0
     hf = np.zeros(n)
@@ -510,48 +532,77 @@ def spectral_be_try(p, op: SpectralOperator, xr, ur, st, vs, nc, ys, un, h, t1, 
     jd = np.zeros(n)  # h f' on the contact blocks
     sites = st[:nc]
     cg_its = [0]
+    size = n + 1 if dead else n
 
     def count(_):
         cg_its[0] += 1
 
-    jac = LinearOperator((n, n), matvec=lambda v: cdiag * v + h2 * op.apply(v) + jd * v, dtype=float)
+    def jacobian(v):
+        w = cdiag * v[:n] + h2 * op.apply(v[:n]) + jd * v[:n]
+        if not dead:
+            return w
+        return np.concatenate([w - bp * v[n], [n * ap_ * v[n] - bp * np.sum(v[:n])]])
+
+    jac = LinearOperator((size, size), matvec=jacobian, dtype=float)
     for it in range(NEWTON_MAX):
         eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk)
         jd[sites] = dk
         res = rhs - (cdiag * un + h2 * op.apply(un) + hf)
         pre = 1.0 / (cdiag + h2 * op.lii + jd)
+        if dead:
+            res = np.concatenate([res + bp * Unew, [rhs_p - (n * ap_ * Unew - bp * np.sum(un))]])
+            pre = np.concatenate([pre, [1.0 / (n * ap_)]])
         dv, info = cg(jac, res, rtol=CG_RTOL, atol=0.0, maxiter=CG_MAXITER,
-                      M=LinearOperator((n, n), matvec=lambda r: pre * r, dtype=float), callback=count)
+                      M=LinearOperator((size, size), matvec=lambda r: pre * r, dtype=float), callback=count)
         if info != 0:
             return -1, lx, cg_its[0]
-        big_v = float(np.max(np.abs(dv[free]))) if n > nc else 0.0
-        un += dv  # contact blocks: overwritten from (y, s) below
+        big_v = float(np.max(np.abs(dv[:n][free]))) if n > nc else 0.0
+        if dead:
+            big_v = max(big_v, abs(dv[n]))
+            Unew += dv[n]
+        un += dv[:n]  # contact blocks: overwritten from (y, s) below
         big_y = update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, 1)
         if big_y < 0.0:
             return -1, lx, cg_its[0]
         if big_y < NEWTON_DY and big_v < NEWTON_DV * tol:
+            Un[:] = Unew
             return (it + 1 if finish_contacts(nc, st, vs, yk, sk, pk, un) else -1), lx, cg_its[0]
     return -1, lx, cg_its[0]
 
 
-def spectral_step_balance(p, op: SpectralOperator, xr, ur, un, lx, h, t1, nc, st, vs):
+def spectral_step_balance(p, op: SpectralOperator, xr, ur, Xr, Ur, un, Un, lx, h, t1, nc, st, vs):
     """A slab row's backward-Euler step: works by the trapezoidal rule and the energy residual
-    (as :func:`step_balance`; the energy is the kinetic one and the body's, (1/2) (x - v_d t) . L (x - v_d t),
-    given L x at the step's start); returns (residual, sum of the works' magnitudes, mean drive force
-    sum, drive work, damping work, contact work)."""
+    (as :func:`step_balance`; the energy is the kinetic one, the body's (1/2) (x - d) . L (x - d),
+    d = v_d t or the plate's X, given L (x - X) at the step's start (:func:`spectral_be_try`), and
+    under the dead weight the plate's kinetic energy and the weight's potential -F_b n X); returns
+    (residual, sum of the works' magnitudes, mean drive force sum, drive work, damping work, contact
+    work). Under the dead weight the drive force and work are 0 here: the run takes the weight's work
+    from the plate's displacement, as for the explicit steps."""
     n = xr.size
-    m, meta, vd, kd0 = p[P_M], p[P_META], p[P_VD], op.k0
+    m, meta, vd, k0 = p[P_M], p[P_META], p[P_VD], op.k0
     amp, c, meta_c = p[P_AMP], p[P_C], m * p[P_ETAC]
     t0 = t1 - h
     x1 = xr + h * un
     lx1 = lx + h * op.apply(un)
-    e0 = 0.5 * m * float(np.dot(ur, ur)) + op.energy(xr, lx, vd * t0)
-    e1 = 0.5 * m * float(np.dot(un, un)) + op.energy(x1, lx1, vd * t1)
-    f0 = kd0 * (n * vd * t0 - float(np.sum(xr)))
-    f1 = kd0 * (n * vd * t1 - float(np.sum(x1)))
-    fsum = 0.5 * (f0 + f1)
-    w_drive = fsum * vd * h
-    w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
+    e0 = 0.5 * m * float(np.dot(ur, ur))
+    e1 = 0.5 * m * float(np.dot(un, un))
+    if p[P_KD] == 0.0:
+        Xp, Up, Un1 = float(Xr[0]), float(Ur[0]), float(Un[0])
+        X1 = Xp + h * Un1
+        lx1 -= h * Un1 * k0  # L_c (x' - X') = L_c (x - X) + h (L_c u' - k_c(0) U')
+        fb = p[P_FCONST] * n
+        e0 += 0.5 * n * p[P_ML] * Up * Up + op.energy(xr - Xp, lx, 0.0) - fb * Xp
+        e1 += 0.5 * n * p[P_ML] * Un1 * Un1 + op.energy(x1 - X1, lx1, 0.0) - fb * X1
+        w_damp = -0.5 * meta * (float(np.sum((ur - Up) ** 2)) + float(np.sum((un - Un1) ** 2))) * h
+        fsum = w_drive = 0.0
+    else:
+        e0 += op.energy(xr, lx, vd * t0)
+        e1 += op.energy(x1, lx1, vd * t1)
+        f0 = k0 * (n * vd * t0 - float(np.sum(xr)))
+        f1 = k0 * (n * vd * t1 - float(np.sum(x1)))
+        fsum = 0.5 * (f0 + f1)
+        w_drive = fsum * vd * h
+        w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
     w_contact = 0.5 * (contact_power_at(nc, st, vs, ur, amp, c, meta_c) + contact_power_at(nc, st, vs, un, amp, c, meta_c)) * h
     bal = (e1 - e0) - (w_drive + w_damp - w_contact)
     return bal, abs(w_drive) + abs(w_damp) + abs(w_contact), fsum, w_drive, w_damp, w_contact
