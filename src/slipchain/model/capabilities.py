@@ -35,9 +35,6 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
     if drive == "dead_weight" and not _GEOMETRIES[geometry].top:
         return "a half-space has no top to carry the weight (use geometry = 'slab')"
     if integrator == "implicit":
-        if geometry == "chain2d":
-            return ("integrator = 'implicit' does not run on the chain2d in this version (its backward Euler solves the "
-                    "chain's cyclic banded system or the slab's Fourier-diagonal one; use integrator = 'adaptive')")
         if material != "elastic":
             return ("integrator = 'implicit' runs with material = 'elastic' only in this version (the Maxwell arms are "
                     "not in its implicit system; use integrator = 'fold')")

@@ -222,7 +222,7 @@ def implicit_stepper(explicit, commit):
     the levels above it (up to ``control[4]``) while every contact is on the rising branch of eq. (1).
     Composed with the chain's body (its explicit part and commit serve the adaptive levels); the
     controller (:func:`implicit_plan`, :func:`after_explicit`, :func:`implicit_verdict`) is shared with
-    the slab's (:func:`spectral_implicit_advance`)."""
+    the other geometries' (:func:`krylov_implicit_advance`)."""
     astep = adaptive_stepper(explicit, commit)
 
     @nb.njit(cache=True, inline="always")
@@ -462,32 +462,40 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     return ChunkOutput(out, acc, cacc)
 
 
-def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
-    """integrator = 'implicit' on the slab and half-space (issue 27; either drive, material 'elastic'):
-    row after row, each step as the implicit stepper's controller says (:func:`implicit_plan`, shared
-    with the chains): explicit steps by the slab's compiled adaptive step on this row alone (one FFT
-    each), backward-Euler tries by :func:`.implicit.spectral_be_try` (Newton, each linear solve by
-    preconditioned conjugate gradients, one FFT per iteration), judged by :func:`implicit_verdict`.
-    The level, error memory and back-off go on across samples (``Batch.carry``, as the chains')."""
+def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
+    """integrator = 'implicit' on the slab, half-space and chain2d (issue 27; either drive, material
+    'elastic'): row after row, each step as the implicit stepper's controller says
+    (:func:`implicit_plan`, shared with the chain's compiled stepper): explicit steps by the
+    geometry's compiled adaptive step on this row alone (:func:`rows_driver`; the slab's with one FFT
+    each), backward-Euler tries by :func:`.implicit.krylov_be_try` (Newton, each linear solve by
+    preconditioned conjugate gradients; :class:`.implicit.SlabSystem`, :class:`.implicit.LatticeSystem`),
+    judged by :func:`implicit_verdict`. The level, error memory and back-off go on across samples
+    (``Batch.carry``, as the chain's)."""
     if fft is None:
         import scipy.fft as fft
     b, n = batch.x.shape
-    shape = batch.shape
+    spectral_body = BODIES[batch.geometry] == "spectral"
     out, acc, cacc = _chunk_outputs(batch, n_samples)
     fd = np.zeros(b)
     _, folds, control = _stepper_inputs(batch)
-    step_rows = loop(batch.geometry, True)  # the explicit levels: the slab's adaptive step
+    step_rows = _row_loop(BODIES[batch.geometry])  # the explicit levels: the geometry's adaptive step, one row at a time
     ctl = np.zeros((b, N_CT), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, batch.sites.shape[1])
     un, Un, dampx, dampX, rk, ra, uk, fk, _, _ = scratch
-    k0 = np.ascontiguousarray(batch.kernel[:, 0, 0])
+    k0 = np.ascontiguousarray(batch.kernel[:, 0, 0]) if spectral_body else np.zeros(b)
+    commit = spectral.body_commit if spectral_body else lattice_commit
+    no_force = np.zeros((1, 0))
     carry = batch.carry
     for row in np.flatnonzero(batch.status < 0):
         r = slice(row, row + 1)
         p = batch.params[row]
-        dead = p[P_KD] == 0.0  # the dead weight: the body acts on x - X (the plate's displacement in every entry)
-        op = implicit.SpectralOperator(batch.kernel[row], shape, fft)
+        dead = p[P_KD] == 0.0  # the dead weight: the slab's body acts on x - X (the plate's displacement in every entry)
+        if spectral_body:
+            op = implicit.SpectralOperator(batch.kernel[row], batch.shape, fft)
+            system = implicit.SlabSystem(op, p)
+        else:
+            system = implicit.LatticeSystem(p, batch.shape)
         xr, ur, Xr, Ur = batch.x[row], batch.u[row], batch.X[row], batch.U[row]
         st, vs, nc, ys = batch.sites[row], batch.vstar[row], int(batch.n_contacts[row]), batch.ysolve[row]
         ctrl, cr, ap, ca = control[row], ctl[row], aprev[row], cacc[row]
@@ -505,8 +513,8 @@ def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, f
                     was = cr[CT_LEVEL]
                     if what == PLAN_TAIL:
                         cr[CT_LEVEL] = ctrl[1]
-                    force = -op.apply(xr - Xr if dead else xr)[None, :]
-                    step_rows(force, *rows[:20], sample_steps, batch.status[r], scratch)
+                    force = -op.apply(xr - Xr if dead else xr)[None, :] if spectral_body else no_force
+                    step_rows(force, *rows, sample_steps, batch.status[r], scratch)
                     if what == PLAN_TAIL:
                         cr[CT_LEVEL] = lv
                     else:
@@ -514,19 +522,18 @@ def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, f
                     continue
                 h = dt0 * w
                 t1 = (batch.step[row] + w) * dt0
-                its, lx, _ = implicit.spectral_be_try(p, op, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra,
-                                                      rk, ap, cr[CT_HAVE] > 0)
+                its, _ = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra, rk,
+                                                ap, cr[CT_HAVE] > 0)
                 err = _error(n, ur, Ur, un, Un, ap, h) if its > 0 and cr[CT_HAVE] > 0 else 0.0
                 bal = scale = fsum = w_drive = w_damp = w_contact = 0.0
                 if its > 0 and err <= ctrl[0]:
-                    bal, scale, fsum, w_drive, w_damp, w_contact = implicit.spectral_step_balance(
-                        p, op, xr, ur, Xr, Ur, un, Un, lx, h, t1, nc, st, vs)
+                    bal, scale, fsum, w_drive, w_damp, w_contact = system.balance(xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs)
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
                     continue
                 _keep_acceleration(n, ur, Ur, un, Un, ap, h)
                 implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
                 _weighted_contact_sums(nc, fk, uk, ca, slow, w)
-                spectral.body_commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+                commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
                 acc[row, A_WCONTACT] -= w_contact
                 acc[row, A_WDAMP] += w_damp
                 acc[row, A_WDRIVE] += w_drive
@@ -535,8 +542,12 @@ def spectral_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, f
                 cr[CT_J] += w
             _save_carry(carry[row], cr)
             # the sample's end for this row (the others' samples are zero here and done in their turn)
-            spectral.end_sample(batch.x[r], batch.X[r], batch.status[r], batch.step[r], fd[r], out[r], s, sample_steps,
-                                acc[r])
+            if spectral_body:
+                spectral.end_sample(batch.x[r], batch.X[r], batch.status[r], batch.step[r], fd[r], out[r], s,
+                                    sample_steps, acc[r])
+            elif not _end_sample(xr, Xr, fd[row], sample_steps, acc[row, A_WCONTACT], out[row, s]):
+                batch.status[row] = batch.step[row]
+            fd[row] = 0.0
             if batch.status[row] >= 0:
                 break
         carry[row, N_CARRY:] = ap
@@ -558,9 +569,9 @@ def kernel_advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutp
 def advance(batch: Batch, n_samples: int, sample_steps: int) -> ChunkOutput:
     """Advance a batch on the CPU by the driver of its geometry's body: :func:`kernel_advance` (the
     chains) or :func:`fft_advance` (the slab and half-space: the elastic force by FFT)."""
+    if batch.implicit and batch.geometry != "chain":
+        return krylov_implicit_advance(batch, n_samples, sample_steps)
     if BODIES[batch.geometry] == "spectral":
-        if batch.implicit:
-            return spectral_implicit_advance(batch, n_samples, sample_steps)
         return fft_advance(batch, n_samples, sample_steps)
     return kernel_advance(batch, n_samples, sample_steps)
 
@@ -619,6 +630,13 @@ def loop(geometry: str, adaptive: bool | str, material: str = "elastic"):
     under the dead weight (:mod:`.viscoelastic`)."""
     body = BODIES[geometry] + ("-prony" if material == "prony" else "")
     return _loop(body, adaptive)
+
+
+@functools.cache
+def _row_loop(body: str):
+    """One adaptive step of each live row (:func:`rows_driver`) with this body: the slab's FFT loop, or the
+    same driver over the chains' body (the implicit stepper's explicit levels on chain2d, one row at a time)."""
+    return _loop(body, True) if body == "spectral" else rows_driver(stepper(body, True), False)
 
 
 @functools.cache

@@ -63,7 +63,8 @@ import numba as nb
 import numpy as np
 
 from .cpu import scaled_exp
-from ..scheme import FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KT, P_M, P_META, P_ML, P_VD, Y_LOG, Y_P, Y_Q
+from ..scheme import (FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_M, P_META, P_ML, P_VD,
+                      Y_LOG, Y_P, Y_Q)
 
 Y_MAX = -0.01  # backward Euler only while every contact has log10(|u|/v*) below this (the rising branch, with margin)
 Y_ABORT = -0.001  # an iterate beyond this gives up at once (f' > 0 up to y = 0: the Jacobian stays positive definite)
@@ -439,7 +440,7 @@ def drive_force_sum(p, Xr, t):
 
 
 
-# --- The slab and half-space (issue 27): the same backward Euler, the elastic operator diagonal in Fourier space ---
+# --- The slab, half-space and chain2d (issue 27): the same backward Euler, solved by Newton-Krylov ---
 
 CG_RTOL = 1e-9  # the Newton iteration's linear solve: relative residual of the preconditioned conjugate gradients
 CG_MAXITER = 200
@@ -447,20 +448,7 @@ CG_MAXITER = 200
 
 class SpectralOperator:
     """The elastic operator of one row of a slab or half-space, L x = IFFT[a**2 k(q) FFT(x)]
-    (``kern`` = a**2 k on the rfft2 grid, :class:`.base.Batch`), and what backward Euler needs of it.
-
-    Under the spring drive the blocks' backward-Euler velocities u' solve (module docstring, with the
-    body's force -L (x' - v_d t) and the radiation damping -m gamma (u - v_d) in place of the springs)
-
-        A u' + h f(u') = m u + h (-L x + a**2 k(0) v_d t' + m gamma v_d),   A = (m + h m gamma) I + h**2 L,
-
-    A diagonal in Fourier space (eigenvalues m + h m gamma + h**2 a**2 k(q) > 0). Newton's Jacobian
-    A + h diag(f') is symmetric positive definite on the rising branch; it is solved by scipy's
-    conjugate gradients, preconditioned by its diagonal (Jacobi: m + h m gamma + h**2 L_ii + h f'_i,
-    L_ii the mean of a**2 k(q) over the grid). Where a contact's h f' dominates (creep at large h:
-    h f' ~ 10 against h**2 a**2 k ~ 1e-3 at h = 1 ms, epsilon = 1) that is nearly the inverse; where
-    no contact does, the preconditioned spectrum lies within k(q)/L_ii, so the iterations stay few
-    either way (docs/numerics.md, "The implicit stepper")."""
+    (``kern`` = a**2 k on the rfft2 grid, :class:`.base.Batch`): one rfft2/irfft2 pair per product."""
 
     def __init__(self, kern: np.ndarray, shape: tuple[int, int], fft):
         self.kern = kern
@@ -473,7 +461,7 @@ class SpectralOperator:
         self.lii = float(self.apply(delta)[0])  # the diagonal of the circulant L
 
     def apply(self, v: np.ndarray) -> np.ndarray:
-        """L v: one rfft2/irfft2 pair."""
+        """L v."""
         f = self.fft
         return f.irfft2(self.kern * f.rfft2(v.reshape(self.shape)), s=self.shape).reshape(self.n)
 
@@ -482,132 +470,252 @@ class SpectralOperator:
         return 0.5 * float(np.dot(x - d, lx - self.k0 * d))
 
 
-def spectral_be_try(p, op: SpectralOperator, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
-    """One backward-Euler step of a slab or half-space row (:class:`SpectralOperator`) from (x, u, X, U)
-    at time t1 - h: writes the new velocities into ``un`` (and the plate's into every entry of ``Un``
-    under the dead weight; zero under the spring drive) and each contact's (y, sign) into ``yk``,
-    ``sk``, touching nothing else; Newton as :func:`be_try` (the same contact pieces), each linear
-    solve by preconditioned conjugate gradients. Returns (Newton iterations or -1 where the step may
-    not be taken by backward Euler, L (x - X) at the step's start, conjugate-gradient iterations).
+class SlabSystem:
+    """Backward Euler's linear part on a slab or half-space row (:class:`SpectralOperator` L).
 
-    Under the dead weight (P_KD = 0) the top is a rigid plate (velocity U', mass N_L m per block,
-    :mod:`.spectral`) and one more unknown: with b = h (h a**2 k_c(0) + m gamma),
+    Under the spring drive the blocks' velocities u' solve (module docstring, with the body's force
+    -L (x' - v_d t) and the radiation damping -m gamma (u - v_d) in place of the springs)
 
-        A u' + h f(u') - b U' = m u + h (-L_c (x - X)),
+        A u' + h f(u') = m u + h (-L x + a**2 k(0) v_d t' + m gamma v_d),   A = (m + h m gamma) I + h**2 L,
+
+    A diagonal in Fourier space (eigenvalues m + h m gamma + h**2 a**2 k(q) > 0). Under the dead
+    weight (P_KD = 0) the top is a rigid plate (velocity U', mass N_L m per block, :mod:`.spectral`),
+    one more unknown: with b = h (h a**2 k_c(0) + m gamma),
+
+        A u' + h f(u') - b U' = m u - h L_c (x - X),
         n (N_L m + h m gamma + h**2 a**2 k_c(0)) U' - b sum u' = n (N_L m U + h (F_b + a**2 k_c(0) (<x> - X))),
 
-    the plate's row scaled by n so that the Jacobian stays symmetric (and positive definite: its
-    Schur complement on U' is positive); the conjugate gradients run on the n + 1 unknowns."""
+    the plate's row scaled by n so that the matrix stays symmetric (and positive definite: its Schur
+    complement on U' is positive)."""
+
+    def __init__(self, op: SpectralOperator, p):
+        self.op = op
+        self.p = p
+        self.n = op.n
+        self.dead = p[P_KD] == 0.0
+        self.size = self.n + 1 if self.dead else self.n
+
+    def setup(self, xr, ur, Xr, Ur, h, t1):
+        """The right-hand side at the step's start, and the velocities there as one vector."""
+        p, op, n = self.p, self.op, self.n
+        m, meta, k0 = p[P_M], p[P_META], op.k0
+        self.h = h
+        self.cdiag = m + h * meta
+        if self.dead:
+            Xp = float(Xr[0])
+            self.lx = op.apply(xr - Xp)  # L_c (x - X): the plate's uniform displacement enters mode q = 0 alone
+            self.bp = h * (h * k0 + meta)
+            self.ap = p[P_ML] + h * meta + h * h * k0
+            rhs_p = n * (p[P_ML] * Ur[0] + h * (p[P_FCONST] + k0 * (float(np.mean(xr)) - Xp)))
+            return np.concatenate([m * ur - h * self.lx, [rhs_p]]), np.concatenate([ur, Ur[:1]])
+        self.lx = op.apply(xr)
+        return m * ur + h * (k0 * p[P_VD] * t1 + meta * p[P_VD]) - h * self.lx, ur.copy()
+
+    def matvec(self, v):
+        n, h = self.n, self.h
+        w = self.cdiag * v[:n] + h * h * self.op.apply(v[:n])
+        if not self.dead:
+            return w
+        return np.concatenate([w - self.bp * v[n], [n * self.ap * v[n] - self.bp * np.sum(v[:n])]])
+
+    def diagonal(self):
+        d = np.full(self.size, self.cdiag + self.h * self.h * self.op.lii)
+        if self.dead:
+            d[self.n] = self.n * self.ap
+        return d
+
+    def upper(self, v, Un):
+        """The upper layer's velocities from the unknowns: the plate's (dead weight), or zero."""
+        Un[:] = v[self.n] if self.dead else 0.0
+
+    def acceleration(self, ap):
+        """The last step's accelerations as one vector of the unknowns."""
+        return ap[:self.size]
+
+    def balance(self, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs):
+        """The step's works by the trapezoidal rule and its energy residual (:func:`step_balance`; the
+        energy is the kinetic one, the body's (1/2) (x - d) . L (x - d), d = v_d t or the plate's X,
+        and under the dead weight the plate's kinetic energy and the weight's potential -F_b n X).
+        Under the dead weight the drive force and work are 0 here: the run takes the weight's work
+        from the plate's displacement, as for the explicit steps."""
+        p, op, n = self.p, self.op, self.n
+        m, meta, vd, k0 = p[P_M], p[P_META], p[P_VD], op.k0
+        t0 = t1 - h
+        x1 = xr + h * un
+        lx, lx1 = self.lx, self.lx + h * op.apply(un)
+        e0 = 0.5 * m * float(np.dot(ur, ur))
+        e1 = 0.5 * m * float(np.dot(un, un))
+        if self.dead:
+            Xp, Up, Un1 = float(Xr[0]), float(Ur[0]), float(Un[0])
+            X1 = Xp + h * Un1
+            lx1 -= h * Un1 * k0  # L_c (x' - X') = L_c (x - X) + h (L_c u' - k_c(0) U')
+            fb = p[P_FCONST] * n
+            e0 += 0.5 * n * p[P_ML] * Up * Up + op.energy(xr - Xp, lx, 0.0) - fb * Xp
+            e1 += 0.5 * n * p[P_ML] * Un1 * Un1 + op.energy(x1 - X1, lx1, 0.0) - fb * X1
+            w_damp = -0.5 * meta * (float(np.sum((ur - Up) ** 2)) + float(np.sum((un - Un1) ** 2))) * h
+            return _balance(p, e1 - e0, 0.0, 0.0, w_damp, h, nc, st, vs, ur, un)
+        e0 += op.energy(xr, lx, vd * t0)
+        e1 += op.energy(x1, lx1, vd * t1)
+        fsum = 0.5 * k0 * (n * vd * (t0 + t1) - float(np.sum(xr)) - float(np.sum(x1)))
+        w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
+        return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un)
+
+
+class LatticeSystem:
+    """Backward Euler's linear part on a chain2d row (the (Lx, Ly) lattice of :func:`.scheme.block_update_2d`):
+    unknowns (u, U) of every block, A = M + h C + h**2 K (M the masses, C the pair dampers m eta on
+    every spring, K the springs K, K_Y, K_L, K_LY, K_T and the drive springs K_d), symmetric positive
+    definite; its products by numpy's periodic shifts."""
+
+    def __init__(self, p, shape):
+        self.p = p
+        self.shape = shape
+        self.n = shape[0] * shape[1]
+        self.size = 2 * self.n
+
+    def _lap(self, f):
+        """(sum over the x neighbours - 2 f, sum over the y neighbours - 2 f) on the lattice."""
+        g = f.reshape(self.shape)
+        return ((np.roll(g, 1, 0) + np.roll(g, -1, 0) - 2.0 * g).ravel(),
+                (np.roll(g, 1, 1) + np.roll(g, -1, 1) - 2.0 * g).ravel())
+
+    def forces(self, x, X):
+        """The springs' forces on (x, X), the drive springs' -K_d X included (not their v_d t)."""
+        p = self.p
+        lxx, lxy = self._lap(x)
+        lXx, lXy = self._lap(X)
+        return (p[P_K] * lxx + p[P_KY] * lxy + p[P_KT] * (X - x),
+                p[P_KL] * lXx + p[P_KLY] * lXy + p[P_KT] * (x - X) - p[P_KD] * X)
+
+    def damping(self, u, U):
+        """The pair dampers' forces (block_update_2d's dx, dX)."""
+        meta = self.p[P_META]
+        lux, luy = self._lap(u)
+        lUx, lUy = self._lap(U)
+        return meta * (lux + luy + U - u), meta * (lUx + lUy + u - U)
+
+    def setup(self, xr, ur, Xr, Ur, h, t1):
+        p = self.p
+        self.h = h
+        fx, fX = self.forces(xr, Xr)
+        g = p[P_KD] * p[P_VD] * t1 + p[P_FCONST]
+        return np.concatenate([p[P_M] * ur + h * fx, p[P_ML] * Ur + h * (fX + g)]), np.concatenate([ur, Ur])
+
+    def matvec(self, v):
+        p, n, h = self.p, self.n, self.h
+        u, U = v[:n], v[n:]
+        fx, fX = self.forces(u, U)
+        dx, dX = self.damping(u, U)
+        return np.concatenate([p[P_M] * u - h * dx - h * h * fx, p[P_ML] * U - h * dX - h * h * fX])
+
+    def diagonal(self):
+        p, n, h = self.p, self.n, self.h
+        ny = 2.0 if self.shape[1] > 1 else 0.0  # y neighbours (Ly = 1: the block itself, no bond)
+        hc = h * p[P_META] * (3.0 + ny)  # the dampers along x, y and to the other layer
+        du = p[P_M] + hc + h * h * (2.0 * p[P_K] + ny * p[P_KY] + p[P_KT])
+        dU = p[P_ML] + hc + h * h * (2.0 * p[P_KL] + ny * p[P_KLY] + p[P_KT] + p[P_KD])
+        return np.concatenate([np.full(n, du), np.full(n, dU)])
+
+    def upper(self, v, Un):
+        Un[:] = v[self.n:]
+
+    def acceleration(self, ap):
+        return ap
+
+    def energy(self, x, u, X, U, t):
+        """Kinetic, the springs' and the drive springs' energy and the dead weight's potential -F_b X."""
+        p = self.p
+        lxx, lxy = self._lap(x)
+        lXx, lXy = self._lap(X)
+        # sum over bonds of (1/2) k (difference)**2 = -(1/2) k f . lap(f) on a periodic lattice
+        springs = -0.5 * (p[P_K] * np.dot(x, lxx) + p[P_KY] * np.dot(x, lxy) + p[P_KL] * np.dot(X, lXx)
+                          + p[P_KLY] * np.dot(X, lXy)) + 0.5 * p[P_KT] * np.dot(X - x, X - x)
+        drive = p[P_VD] * t
+        return float(0.5 * p[P_M] * np.dot(u, u) + 0.5 * p[P_ML] * np.dot(U, U) + springs
+                     + 0.5 * p[P_KD] * np.dot(drive - X, drive - X) - p[P_FCONST] * np.sum(X))
+
+    def balance(self, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs):
+        """The step's works by the trapezoidal rule and its energy residual, as :func:`step_balance`."""
+        p, n = self.p, self.n
+        t0 = t1 - h
+        x1, X1 = xr + h * un, Xr + h * Un
+        de = self.energy(x1, un, X1, Un, t1) - self.energy(xr, ur, Xr, Ur, t0)
+        fsum = 0.5 * p[P_KD] * (n * p[P_VD] * (t0 + t1) - float(np.sum(Xr)) - float(np.sum(X1)))
+        d0x, d0X = self.damping(ur, Ur)
+        d1x, d1X = self.damping(un, Un)
+        w_damp = 0.5 * (np.dot(d0x, ur) + np.dot(d0X, Ur) + np.dot(d1x, un) + np.dot(d1X, Un)) * h
+        return _balance(p, de, fsum, fsum * p[P_VD] * h, float(w_damp), h, nc, st, vs, ur, un)
+
+
+def _balance(p, de, fsum, w_drive, w_damp, h, nc, st, vs, ur, un):
+    """(energy residual, sum of the works' magnitudes, drive force sum, drive, damping and contact work)
+    of a step with energy change ``de``, the contacts' work by the trapezoidal rule."""
+    amp, c, meta_c = p[P_AMP], p[P_C], p[P_M] * p[P_ETAC]
+    w_contact = 0.5 * (contact_power_at(nc, st, vs, ur, amp, c, meta_c) + contact_power_at(nc, st, vs, un, amp, c, meta_c)) * h
+    return de - (w_drive + w_damp - w_contact), abs(w_drive) + abs(w_damp) + abs(w_contact), fsum, w_drive, w_damp, w_contact
+
+
+def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
+    """One backward-Euler step of a slab, half-space or chain2d row (``system``: :class:`SlabSystem`
+    or :class:`LatticeSystem`) from (x, u, X, U) at time t1 - h: writes the new velocities into
+    ``un``, ``Un`` and each contact's (y, sign) into ``yk``, ``sk``, touching nothing else. Newton
+    as :func:`be_try` (the same contact pieces; the contacts act on the first n unknowns, the blocks'
+    velocities); each linear solve, (A + h diag(f')) dv = r, by scipy's conjugate gradients
+    preconditioned by the diagonal (Jacobi). Where a contact's h f' dominates (creep at large h:
+    h f' ~ 10 against h**2 a**2 k ~ 1e-3 at h = 1 ms, epsilon = 1) that is nearly the inverse;
+    where none does, the preconditioned spectrum lies within the spread of A's diagonal over its
+    eigenvalues, so the iterations stay few either way. Returns (Newton iterations or -1 where the
+    step may not be taken by backward Euler, conjugate-gradient iterations)."""
     from scipy.sparse.linalg import LinearOperator, cg
 
     n = xr.size
-    m, meta, vd = p[P_M], p[P_META], p[P_VD]
-    amp, c, meta_c = p[P_AMP], p[P_C], m * p[P_ETAC]
-    dead = p[P_KD] == 0.0
-    k0 = op.k0
-    cdiag = m + h * meta
-    h2 = h * h
-    if dead:
-        Xp, Up = float(Xr[0]), float(Ur[0])
-        lx = op.apply(xr - Xp)  # L_c (x - X): the plate's uniform displacement enters mode q = 0 alone
-        rhs = m * ur - h * lx
-        bp = h * (h * k0 + meta)
-        ap_ = p[P_ML] + h * meta + h2 * k0
-        rhs_p = n * (p[P_ML] * Up + h * (p[P_FCONST] + k0 * (float(np.mean(xr)) - Xp)))
-    else:
-        lx = op.apply(xr)
-        rhs = m * ur + h * (k0 * vd * t1 + meta * vd) - h * lx
-        bp = ap_ = rhs_p = 0.0
-    un[:] = ur + h * ap[:n] if have else ur
-    Unew = (Up + h * ap[n]) if dead and have else (Up if dead else 0.0)
+    amp, c, meta_c = p[P_AMP], p[P_C], p[P_M] * p[P_ETAC]
+    rhs, v = system.setup(xr, ur, Xr, Ur, h, t1)
+    size = system.size
+    if have:
+        v += h * system.acceleration(ap)
+    un[:] = v[:n]
     if not start_contacts(nc, st, ur, un, ys, vs, yk, sk):
-        return -1, lx, 0
-    hf = np.zeros(n)
+        return -1, 0
+    hf = np.zeros(size)
     dk = np.empty(nc)
     pk = np.empty(nc)
     qk = np.empty(nc)
-    free = np.ones(n, dtype=bool)
+    free = np.ones(size, dtype=bool)
     free[st[:nc]] = False
     factors(nc, c, yk, pk, qk)
-    jd = np.zeros(n)  # h f' on the contact blocks
+    jd = np.zeros(size)  # h f' on the contact blocks
     sites = st[:nc]
+    base = system.diagonal()
     cg_its = [0]
-    size = n + 1 if dead else n
 
     def count(_):
         cg_its[0] += 1
 
-    def jacobian(v):
-        w = cdiag * v[:n] + h2 * op.apply(v[:n]) + jd * v[:n]
-        if not dead:
-            return w
-        return np.concatenate([w - bp * v[n], [n * ap_ * v[n] - bp * np.sum(v[:n])]])
-
-    jac = LinearOperator((size, size), matvec=jacobian, dtype=float)
+    jac = LinearOperator((size, size), matvec=lambda w: system.matvec(w) + jd * w, dtype=float)
     for it in range(NEWTON_MAX):
+        v[:n] = un
         eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk)
+        v[sites] = un[sites]
         jd[sites] = dk
-        res = rhs - (cdiag * un + h2 * op.apply(un) + hf)
-        pre = 1.0 / (cdiag + h2 * op.lii + jd)
-        if dead:
-            res = np.concatenate([res + bp * Unew, [rhs_p - (n * ap_ * Unew - bp * np.sum(un))]])
-            pre = np.concatenate([pre, [1.0 / (n * ap_)]])
+        res = rhs - (system.matvec(v) + hf)
+        pre = 1.0 / (base + jd)
         dv, info = cg(jac, res, rtol=CG_RTOL, atol=0.0, maxiter=CG_MAXITER,
                       M=LinearOperator((size, size), matvec=lambda r: pre * r, dtype=float), callback=count)
         if info != 0:
-            return -1, lx, cg_its[0]
-        big_v = float(np.max(np.abs(dv[:n][free]))) if n > nc else 0.0
-        if dead:
-            big_v = max(big_v, abs(dv[n]))
-            Unew += dv[n]
-        un += dv[:n]  # contact blocks: overwritten from (y, s) below
+            return -1, cg_its[0]
+        big_v = float(np.max(np.abs(dv[free]))) if free.any() else 0.0
+        v += dv
+        un[:] = v[:n]  # contact blocks: overwritten from (y, s) below
         big_y = update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, 1)
         if big_y < 0.0:
-            return -1, lx, cg_its[0]
+            return -1, cg_its[0]
         if big_y < NEWTON_DY and big_v < NEWTON_DV * tol:
-            Un[:] = Unew
-            return (it + 1 if finish_contacts(nc, st, vs, yk, sk, pk, un) else -1), lx, cg_its[0]
-    return -1, lx, cg_its[0]
+            system.upper(v, Un)
+            return (it + 1 if finish_contacts(nc, st, vs, yk, sk, pk, un) else -1), cg_its[0]
+    return -1, cg_its[0]
 
 
-def spectral_step_balance(p, op: SpectralOperator, xr, ur, Xr, Ur, un, Un, lx, h, t1, nc, st, vs):
-    """A slab row's backward-Euler step: works by the trapezoidal rule and the energy residual
-    (as :func:`step_balance`; the energy is the kinetic one, the body's (1/2) (x - d) . L (x - d),
-    d = v_d t or the plate's X, given L (x - X) at the step's start (:func:`spectral_be_try`), and
-    under the dead weight the plate's kinetic energy and the weight's potential -F_b n X); returns
-    (residual, sum of the works' magnitudes, mean drive force sum, drive work, damping work, contact
-    work). Under the dead weight the drive force and work are 0 here: the run takes the weight's work
-    from the plate's displacement, as for the explicit steps."""
-    n = xr.size
-    m, meta, vd, k0 = p[P_M], p[P_META], p[P_VD], op.k0
-    amp, c, meta_c = p[P_AMP], p[P_C], m * p[P_ETAC]
-    t0 = t1 - h
-    x1 = xr + h * un
-    lx1 = lx + h * op.apply(un)
-    e0 = 0.5 * m * float(np.dot(ur, ur))
-    e1 = 0.5 * m * float(np.dot(un, un))
-    if p[P_KD] == 0.0:
-        Xp, Up, Un1 = float(Xr[0]), float(Ur[0]), float(Un[0])
-        X1 = Xp + h * Un1
-        lx1 -= h * Un1 * k0  # L_c (x' - X') = L_c (x - X) + h (L_c u' - k_c(0) U')
-        fb = p[P_FCONST] * n
-        e0 += 0.5 * n * p[P_ML] * Up * Up + op.energy(xr - Xp, lx, 0.0) - fb * Xp
-        e1 += 0.5 * n * p[P_ML] * Un1 * Un1 + op.energy(x1 - X1, lx1, 0.0) - fb * X1
-        w_damp = -0.5 * meta * (float(np.sum((ur - Up) ** 2)) + float(np.sum((un - Un1) ** 2))) * h
-        fsum = w_drive = 0.0
-    else:
-        e0 += op.energy(xr, lx, vd * t0)
-        e1 += op.energy(x1, lx1, vd * t1)
-        f0 = k0 * (n * vd * t0 - float(np.sum(xr)))
-        f1 = k0 * (n * vd * t1 - float(np.sum(x1)))
-        fsum = 0.5 * (f0 + f1)
-        w_drive = fsum * vd * h
-        w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
-    w_contact = 0.5 * (contact_power_at(nc, st, vs, ur, amp, c, meta_c) + contact_power_at(nc, st, vs, un, amp, c, meta_c)) * h
-    bal = (e1 - e0) - (w_drive + w_damp - w_contact)
-    return bal, abs(w_drive) + abs(w_damp) + abs(w_contact), fsum, w_drive, w_damp, w_contact
-
-
-__all__ = ["ENERGY_TOL", "NEWTON_MAX", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "spectral_be_try", "spectral_step_balance", "chain_coefficients", "chain_damping", "contact_power_at",
+__all__ = ["ENERGY_TOL", "NEWTON_MAX", "LatticeSystem", "SlabSystem", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "krylov_be_try", "chain_coefficients", "chain_damping", "contact_power_at",
            "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
            "step_balance"]
