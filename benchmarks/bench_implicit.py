@@ -3,12 +3,14 @@
 The epsilon = 1 reference point (N = 301, theta = 1, eta_c = 0.1 omega0, v_d = v0, steady start,
 dt = 1e-7, step_tol = 0.01), a fixed window of simulated time (default 5 s, about 4.5 slip
 cycles of 1.1 s; ``--t 22`` for the issue's 20 cycles), output samples of 10 ms and 1 ms; and the
-same run at epsilon = 1e-2. Prints per case the wall time (compilation excluded), the steps
+same run at epsilon = 1e-2; with ``--geometry slab`` (or ``halfspace``, ``chain2d``) the same point on an
+``--L`` x ``--L`` interface (N_L = 5) instead of the chain. Prints per case the wall time (compilation excluded), the steps
 accepted, mu_star +- SE, the energy balance and the slip events' sample times, and the ratios.
 Accuracy: the implicit and adaptive runs are compared event by event (the same output samples,
 the drop of f_d summed over them) and by mu_star in units of its SE.
 
     .venv/bin/python benchmarks/bench_implicit.py [--t 5] [--intervals 1e-2 1e-3] [--no-eps2]
+    .venv/bin/python benchmarks/bench_implicit.py --geometry slab --L 64 --t 1 --intervals 1e-3 --no-eps2
 """
 
 from __future__ import annotations
@@ -49,10 +51,14 @@ def main() -> None:
     ap.add_argument("--t", type=float, default=5.0, help="simulated seconds")
     ap.add_argument("--intervals", type=float, nargs="+", default=[1e-2, 1e-3])
     ap.add_argument("--no-eps2", action="store_true", help="skip the epsilon = 1e-2 runs")
+    ap.add_argument("--geometry", default="chain", choices=["chain", "chain2d", "slab", "halfspace"])
+    ap.add_argument("--L", type=int, default=64, help="interface side (2-D geometries)")
     args = ap.parse_args()
+    ref = REF if args.geometry == "chain" else dict(REF, geometry=args.geometry, N=args.L, Ly=args.L, N_L=5)
     for integ in ("implicit", "adaptive"):  # compile
-        run(make_config(N=11, theta=0.5, t_total=1e-4, integrator=integ, dt=1e-7, epsilon=1.0, start="steady"))
-    print(f"# {platform.processor() or platform.machine()}; epsilon = 1 reference point, {args.t:g} s simulated")
+        run(make_config(**dict(ref, t_total=1e-4, integrator=integ, epsilon=1.0)))
+    where = "chain, N = 301" if args.geometry == "chain" else f"{args.geometry}, {args.L} x {args.L}"
+    print(f"# {platform.processor() or platform.machine()}; epsilon = 1 reference point ({where}), {args.t:g} s simulated")
     print("| epsilon | output interval (s) | integrator | wall (s) | steps accepted | mu_star | SE | energy balance |"
           " slip events (s) |")
     print("|---|---|---|---|---|---|---|---|---|")
@@ -60,7 +66,7 @@ def main() -> None:
         res = {}
         cases = ((1.0, "implicit"), (1.0, "adaptive")) + (() if args.no_eps2 else ((1e-2, "implicit"), (1e-2, "adaptive")))
         for eps, integ in cases:
-            cfg = make_config(**REF, epsilon=eps, integrator=integ, t_total=args.t, output_interval=interval)
+            cfg = make_config(**ref, epsilon=eps, integrator=integ, t_total=args.t, output_interval=interval)
             t0 = time.perf_counter()
             ds = run(cfg)
             wall = time.perf_counter() - t0

@@ -131,7 +131,7 @@ class Config(BaseModel):
     'implicit' (issue 27: the adaptive step up to its top level, and above it backward Euler with
     springs, damping and contacts implicit while every contact is on the rising branch of eq. (1),
     the step bounded by ``step_tol`` and the output samples alone, up to dt 2**24:
-    :mod:`slipchain.engine.backends.implicit`; the chain with material 'elastic');
+    :mod:`slipchain.engine.backends.implicit`; every geometry, with material 'elastic');
     ``dt`` absent: :attr:`default_dt`; every dt must lie below :attr:`dt_stable`;
     ``min_cycles``: the automatic length also needs this many cycles of f_d in its steady window
     (:class:`slipchain.engine.control.UntilConverged`; for the long slip cycles at epsilon = 1);

@@ -52,7 +52,10 @@ their oscillations numerically instead of by the pair damping and the contacts (
 "The implicit stepper"). A try that falls back to the explicit levels makes the stepper wait 1, 2,
 4, ... (at most MAX_BACKOFF of :mod:`.compose`) explicit steps before the next.
 
-Geometry: the chain (1-D) with material 'elastic', either drive, in this version.
+Geometry: the chain (1-D, the compiled cyclic solve above), and the slab, half-space and chain2d
+(:func:`krylov_be_try`: the same Newton iteration, each linear solve by preconditioned conjugate
+gradients on :class:`SlabSystem`, Fourier-diagonal, or :class:`LatticeSystem`), with material
+'elastic', either drive, in this version.
 """
 
 from __future__ import annotations
