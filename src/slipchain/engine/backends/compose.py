@@ -495,7 +495,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
             op = implicit.SpectralOperator(batch.kernel[row], batch.shape, fft)
             system = implicit.SlabSystem(op, p)
         else:
-            system = implicit.LatticeSystem(p, batch.shape)
+            system = implicit.LatticeSystem(p, batch.shape, fft)
         xr, ur, Xr, Ur = batch.x[row], batch.u[row], batch.X[row], batch.U[row]
         st, vs, nc, ys = batch.sites[row], batch.vstar[row], int(batch.n_contacts[row]), batch.ysolve[row]
         ctrl, cr, ap, ca = control[row], ctl[row], aprev[row], cacc[row]
