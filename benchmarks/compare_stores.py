@@ -7,6 +7,11 @@ the largest |z| and the rms z, how many pairs lie beyond 2 and 3 combined SE, an
 sweep wall time (its invocations.jsonl) and summed member run time; ``--csv`` writes every pair.
 
     .venv/bin/python benchmarks/compare_stores.py results/quick-fixed results/quick-default [--csv pairs.csv]
+
+A store may be named ``STORE@INTEGRATOR`` to take only its members with that integrator, so that one
+sweep over integrators compares with itself (issue 27), with the pairs broken down by epsilon:
+
+    .venv/bin/python benchmarks/compare_stores.py results/implicit-corners@implicit results/implicit-corners@adaptive
 """
 
 from __future__ import annotations
@@ -22,9 +27,14 @@ OWN = {"dt", "integrator", "step_tol", "member_id", "status", "mu_star", "mu_sta
        "message"}
 
 
-def _rows(store: Path) -> dict[tuple, dict]:
+def _split(arg: str) -> tuple[Path, str | None]:
+    path, _, integrator = arg.partition("@")
+    return Path(path), integrator or None
+
+
+def _rows(store: Path, integrator: str | None = None) -> dict[tuple, dict]:
     with (store / "index.csv").open() as fh:
-        rows = list(csv.DictReader(fh))
+        rows = [r for r in csv.DictReader(fh) if integrator is None or r.get("integrator") == integrator]
     keys = [k for k in rows[0] if k not in OWN]
     top = max(float(r["dt"]) for r in rows) if "dt" in rows[0] else None
 
@@ -45,20 +55,31 @@ def _sweep_wall(store: Path) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("a", type=Path)
-    ap.add_argument("b", type=Path)
+    ap.add_argument("a", help="STORE or STORE@INTEGRATOR")
+    ap.add_argument("b", help="STORE or STORE@INTEGRATOR")
     ap.add_argument("--csv", type=Path)
     args = ap.parse_args()
-    ra, rb = _rows(args.a), _rows(args.b)
+    (pa, ia), (pb, ib) = _split(args.a), _split(args.b)
+    ra, rb = _rows(pa, ia), _rows(pb, ib)
     common = sorted(set(ra) & set(rb))
     z = np.array([(float(ra[k]["mu_star"]) - float(rb[k]["mu_star"]))
                   / np.hypot(float(ra[k]["mu_star_sem"]), float(rb[k]["mu_star_sem"])) for k in common])
     print(f"pairs: {len(common)} (completed in {args.a}: {len(ra)}, in {args.b}: {len(rb)})")
     print(f"largest |z| {np.abs(z).max():.2f}, rms z {np.sqrt(np.mean(z**2)):.2f}, mean z {z.mean():+.2f}; "
           f"|z| > 2: {int((np.abs(z) > 2).sum())}, |z| > 3: {int((np.abs(z) > 3).sum())}")
-    for store, rows in ((args.a, ra), (args.b, rb)):
+    eps = sorted({dict(k).get("epsilon") for k in common} - {None})
+    if eps:
+        print("| epsilon | pairs | largest abs z | rms z | members' run time a (s) | b (s) | ratio b/a |")
+        print("|---|---|---|---|---|---|---|")
+    for e in eps:
+        sel = [i for i, k in enumerate(common) if dict(k).get("epsilon") == e]
+        ta = sum(float(ra[common[i]]["wall_time_s"]) for i in sel)
+        tb = sum(float(rb[common[i]]["wall_time_s"]) for i in sel)
+        print(f"| {e:g} | {len(sel)} | {np.abs(z[sel]).max():.2f} | {np.sqrt(np.mean(z[sel] ** 2)):.2f} | {ta:.1f} | "
+              f"{tb:.1f} | {tb / ta:.2f} |")
+    for arg, store, rows in ((args.a, pa, ra), (args.b, pb, rb)):
         run = sum(float(r["wall_time_s"]) for r in rows.values())
-        print(f"{store}: sweep wall {_sweep_wall(store):.1f} s, members' run time {run:.1f} s")
+        print(f"{arg}: sweep wall {_sweep_wall(store):.1f} s, members' run time {run:.1f} s")
     if args.csv:
         with args.csv.open("w", newline="") as fh:
             w = csv.writer(fh)
