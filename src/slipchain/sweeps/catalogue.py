@@ -53,7 +53,7 @@ CATALOGUE: dict[str, Study] = {
                            "mu_max(theta) under a dead weight with a viscoelastic slider"),
     "fig6-fold": Study("validation", 48, "1.4 min", "docs/fold-convergence/report.md",
                        "the fold-aware step at three dt against dt = 1e-8 s"),
-    "implicit-corners": Study("validation", 48, "measuring", "docs/numerics.md",
+    "implicit-corners": Study("validation", 48, "11 min", "docs/numerics.md",
                               "the implicit stepper against the adaptive one at the Fig. 6 corners, epsilon 1e-2, 0.1, 1"),
     "fig6-adaptive": Study("validation", 32, "1.3 min", "docs/numerics.md",
                            "the adaptive step against the fixed step at epsilon = 1e-2"),
