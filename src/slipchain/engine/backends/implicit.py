@@ -66,6 +66,7 @@ import numba as nb
 import numpy as np
 
 from .cpu import scaled_exp
+from .viscoelastic import bulk_forces
 from ..scheme import (FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_M, P_META, P_ML, P_VD,
                       Y_LOG, Y_P, Y_Q)
 
@@ -565,27 +566,14 @@ class SlabSystem:
         return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un)
 
 
-@nb.njit(cache=True)
 def lattice_terms(ly, K, KL, KT, Kd, KY, KLY, meta, a, b, fa, fb, da, db):
     """The springs' forces (fa, fb) and the pair dampers' (da, db) of the fields (a, b) on the two
     layers of the chain2d lattice, as :func:`.scheme.block_update_2d` has them (the drive springs'
-    -K_d b included, not their v_d t): row-major (Lx, Ly), block ix*Ly + iy."""
-    n = a.size
-    lx = n // ly
-    for ix in range(lx):
-        base = ix * ly
-        ipx = ((ix + 1) % lx) * ly
-        imx = ((ix + lx - 1) % lx) * ly
-        for iy in range(ly):
-            i = base + iy
-            ip, im = ipx + iy, imx + iy
-            jp = base + (iy + 1 if iy + 1 < ly else 0)
-            jm = base + (iy - 1 if iy > 0 else ly - 1)
-            da[i] = meta * (a[ip] + a[im] + a[jp] + a[jm] + b[i] - 5.0 * a[i])
-            db[i] = meta * (b[ip] + b[im] + b[jp] + b[jm] + a[i] - 5.0 * b[i])
-            fa[i] = K * (a[ip] + a[im] - 2.0 * a[i]) + KY * (a[jp] + a[jm] - 2.0 * a[i]) + KT * (b[i] - a[i])
-            fb[i] = (KL * (b[ip] + b[im] - 2.0 * b[i]) + KLY * (b[jp] + b[jm] - 2.0 * b[i]) + KT * (a[i] - b[i])
-                     - Kd * b[i])
+    -K_d b included, not their v_d t): the bulk stencil of :func:`.viscoelastic.bulk_forces` twice,
+    the dampers being that stencil with every spring constant m eta (row-major (Lx, Ly))."""
+    bulk_forces(ly, a, b, fa, fb, K, KL, KT, KY, KLY)
+    fb -= Kd * b
+    bulk_forces(ly, a, b, da, db, meta, meta, meta, meta, meta)
 
 
 class LatticeSystem:
