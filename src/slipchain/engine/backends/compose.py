@@ -216,6 +216,16 @@ def implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
     return True
 
 
+@nb.njit(cache=True)
+def implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, yk, sk, uk, fk, ca, slow, w):
+    """An accepted backward-Euler step, before the body's commit: its accelerations kept (the next
+    error estimate), the contacts' velocities, forces and solver state from their (y, sign) in
+    ``yk``, ``sk``, and the contacts' statistics at the step's end (w base steps)."""
+    _keep_acceleration(ur.size, ur, Ur, un, Un, ap, h)
+    implicit.be_contacts(nc, st, vs, ys, yk, sk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
+    _weighted_contact_sums(nc, fk, uk, ca, slow, w)
+
+
 def implicit_stepper(explicit, commit):
     """integrator = 'implicit' (issue 27, :mod:`.implicit`): the adaptive step up to its top level
     (``control[1]``, the explicit springs' stable step), backward Euler with everything implicit on
@@ -261,9 +271,7 @@ def implicit_stepper(explicit, commit):
                                                                                      nc, st, vs, dampx, dampX)
             if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
                 continue
-            _keep_acceleration(n, ur, Ur, un, Un, ap, h)
-            implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
-            _weighted_contact_sums(nc, fk, uk, ca, slow, w)  # the contacts' statistics (at the step's end)
+            implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, ra, rk, uk, fk, ca, slow, w)
             commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
             return w, fsum / n * w, w_contact, w_damp, w_drive, 0.0
 
@@ -530,9 +538,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                     bal, scale, fsum, w_drive, w_damp, w_contact = system.balance(xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs)
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
                     continue
-                _keep_acceleration(n, ur, Ur, un, Un, ap, h)
-                implicit.be_contacts(nc, st, vs, ys, ra, rk, un, uk, fk, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC])
-                _weighted_contact_sums(nc, fk, uk, ca, slow, w)
+                implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, ra, rk, uk, fk, ca, slow, w)
                 commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
                 acc[row, A_WCONTACT] -= w_contact
                 acc[row, A_WDAMP] += w_damp
