@@ -34,10 +34,6 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
     """None where the combination runs, else why not (a sentence for an error message)."""
     if drive == "dead_weight" and not _GEOMETRIES[geometry].top:
         return "a half-space has no top to carry the weight (use geometry = 'slab')"
-    if integrator == "implicit":
-        if material != "elastic":
-            return ("integrator = 'implicit' runs with material = 'elastic' only in this version (the Maxwell arms are "
-                    "not in its implicit system; use integrator = 'fold')")
     if material == "prony":
         if _GEOMETRIES[geometry].spectral and drive != "dead_weight":
             return (f"material = 'prony' runs on the {geometry} under the dead weight only in this version (with the "

@@ -131,7 +131,8 @@ class Config(BaseModel):
     'implicit' (issue 27: the adaptive step up to its top level, and above it backward Euler with
     springs, damping and contacts implicit while every contact is on the rising branch of eq. (1),
     the step bounded by ``step_tol`` and the output samples alone, up to dt 2**24:
-    :mod:`slipchain.engine.backends.implicit`; every geometry, with material 'elastic');
+    :mod:`slipchain.engine.backends.implicit`; every geometry and material: with 'prony' the Maxwell
+    arms are in the backward-Euler system and the explicit steps are the fold step at dt);
     ``dt`` absent: :attr:`default_dt`; every dt must lie below :attr:`dt_stable`;
     ``min_cycles``: the automatic length also needs this many cycles of f_d in its steady window
     (:class:`slipchain.engine.control.UntilConverged`; for the long slip cycles at epsilon = 1);
@@ -364,7 +365,11 @@ class Config(BaseModel):
     @property
     def step_levels(self) -> int:
         """integrator = 'adaptive': how often the step may double, dt * 2**k, while the largest step
-        stays within STABLE_FRACTION of the stable step :attr:`dt_stable`, at most MAX_STEP_LEVELS."""
+        stays within STABLE_FRACTION of the stable step :attr:`dt_stable`, at most MAX_STEP_LEVELS.
+        integrator = 'implicit' with material = 'prony': 0, its explicit steps the fold step at dt (the
+        adaptive levels are not trusted with the Prony bulk: docs/guide/viscoelastic.md)."""
+        if self.integrator == "implicit" and self.material == "prony":
+            return 0
         top = STABLE_FRACTION * self.dt_stable
         k = 0
         while k < MAX_STEP_LEVELS and self.dt * 2.0 ** (k + 1) <= top:

@@ -226,14 +226,17 @@ def implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, yk, sk, uk, fk, ca
     _weighted_contact_sums(nc, fk, uk, ca, slow, w)
 
 
-def implicit_stepper(explicit, commit):
+def implicit_stepper(explicit, commit, be_commit=None):
     """integrator = 'implicit' (issue 27, :mod:`.implicit`): the adaptive step up to its top level
     (``control[1]``, the explicit springs' stable step), backward Euler with everything implicit on
     the levels above it (up to ``control[4]``) while every contact is on the rising branch of eq. (1).
     Composed with the chain's body (its explicit part and commit serve the adaptive levels); the
     controller (:func:`implicit_plan`, :func:`after_explicit`, :func:`implicit_verdict`) is shared with
-    the other geometries' (:func:`krylov_implicit_advance`)."""
+    the other geometries' (:func:`krylov_implicit_advance`). ``be_commit``: the body's commit after a
+    backward-Euler step where it differs from ``commit`` (material 'prony': the arms' update,
+    :func:`.viscoelastic.prony_be_commit`; their work is the step's balance's)."""
     astep = adaptive_stepper(explicit, commit)
+    commit_be = commit if be_commit is None else be_commit
 
     @nb.njit(cache=True, inline="always")
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
@@ -261,19 +264,24 @@ def implicit_stepper(explicit, commit):
             cut = w < (1 << lv)  # cut short by the sample's end
             h = dt0 * w
             t1 = (nstep + w) * dt0
-            its = implicit.be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, ra, rk, ap, cr[CT_HAVE] > 0)
+            its = implicit.be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, ra, rk, ap, cr[CT_HAVE] > 0,
+                                  mt, br)
             err = 0.0
             if its > 0 and cr[CT_HAVE] > 0:
                 err = _error(n, ur, Ur, un, Un, ap, h)
-            bal = scale = fsum = w_drive = w_damp = w_contact = 0.0
+            bal = scale = fsum = w_drive = w_damp = w_contact = w_visc = 0.0
             if its > 0 and err <= tol:  # the works by the trapezoidal rule, and the step's energy residual
                 bal, scale, fsum, w_drive, w_damp, w_contact = implicit.step_balance(p, xr, ur, Xr, Ur, un, Un, h, t1,
                                                                                      nc, st, vs, dampx, dampX)
+                if mt.shape[1] > 0:  # the arms' work (material 'prony')
+                    w_visc = implicit.chain_arm_work(p, mt, br, ur, Ur, un, Un, h)
+                    bal -= w_visc
+                    scale += abs(w_visc)
             if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
                 continue
             implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, ra, rk, uk, fk, ca, slow, w)
-            commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
-            return w, fsum / n * w, w_contact, w_damp, w_drive, 0.0
+            commit_be(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+            return w, fsum / n * w, w_contact, w_damp, w_drive, w_visc
 
     return step
 
@@ -483,27 +491,35 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
         import scipy.fft as fft
     b, n = batch.x.shape
     spectral_body = BODIES[batch.geometry] == "spectral"
+    prony = batch.material_name == "prony"
+    J = batch.material.shape[2] if prony else 0
     out, acc, cacc = _chunk_outputs(batch, n_samples)
     fd = np.zeros(b)
     _, folds, control = _stepper_inputs(batch)
-    step_rows = _row_loop(BODIES[batch.geometry])  # the explicit levels: the geometry's adaptive step, one row at a time
+    # the explicit levels: the geometry's adaptive step, one row at a time (with 'prony' its level 0 alone:
+    # Config.step_levels)
+    step_rows = _row_loop(BODIES[batch.geometry] + ("-prony" if prony else ""))
     ctl = np.zeros((b, N_CT), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, batch.sites.shape[1])
     un, Un, dampx, dampX, rk, ra, uk, fk, _, _ = scratch
     k0 = np.ascontiguousarray(batch.kernel[:, 0, 0]) if spectral_body else np.zeros(b)
-    commit = spectral.body_commit if spectral_body else lattice_commit
+    if prony:  # the arms' update with the step's velocities, then the body's commit
+        commit = viscoelastic.slab_prony_be_commit if spectral_body else viscoelastic.prony_be_commit
+    else:
+        commit = spectral.body_commit if spectral_body else lattice_commit
     no_force = np.zeros((1, 0))
     carry = batch.carry
     for row in np.flatnonzero(batch.status < 0):
         r = slice(row, row + 1)
         p = batch.params[row]
         dead = p[P_KD] == 0.0  # the dead weight: the slab's body acts on x - X (the plate's displacement in every entry)
+        arms = implicit.Arms(batch.material[row], batch.bstate[row]) if prony else None
         if spectral_body:
             op = implicit.SpectralOperator(batch.kernel[row], batch.shape, fft)
-            system = implicit.SlabSystem(op, p)
+            system = implicit.SlabSystem(op, p, arms)
         else:
-            system = implicit.LatticeSystem(p, batch.shape, fft)
+            system = implicit.LatticeSystem(p, batch.shape, fft, arms)
         xr, ur, Xr, Ur = batch.x[row], batch.u[row], batch.X[row], batch.U[row]
         st, vs, nc, ys = batch.sites[row], batch.vstar[row], int(batch.n_contacts[row]), batch.ysolve[row]
         ctrl, cr, ap, ca = control[row], ctl[row], aprev[row], cacc[row]
@@ -512,6 +528,18 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
         rows = (k0[r], batch.x[r], batch.u[r], batch.X[r], batch.U[r], batch.step[r], batch.params[r], batch.sites[r],
                 batch.vstar[r], batch.n_contacts[r], batch.ysolve[r], folds[r], control[r], batch.bstate[r],
                 batch.material[r], ctl[r], aprev[r], cacc[r], acc[r], fd[r])
+
+        def explicit_force():
+            """The body's force from outside its kernel for an explicit step: the slab's -L (x - d), with
+            the arms' -L_c g (kept in work row 2J + 2, as :func:`fft_advance` does); the chains' none."""
+            if not spectral_body:
+                return no_force
+            if not prony:
+                return -op.apply(xr - Xr if dead else xr)[None, :]
+            le, la = op.apply_both(xr - Xr, arms.now()[0])
+            batch.bstate[row, 2 * J + 2] = -la
+            return -(le + la)[None, :]
+
         for s in range(n_samples):
             start_sample(row, batch.n_contacts, batch.ysolve, batch.params, ctl)
             _restore_carry(carry[row], cr)
@@ -521,8 +549,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                     was = cr[CT_LEVEL]
                     if what == PLAN_TAIL:
                         cr[CT_LEVEL] = ctrl[1]
-                    force = -op.apply(xr - Xr if dead else xr)[None, :] if spectral_body else no_force
-                    step_rows(force, *rows, sample_steps, batch.status[r], scratch)
+                    step_rows(explicit_force(), *rows, sample_steps, batch.status[r], scratch)
                     if what == PLAN_TAIL:
                         cr[CT_LEVEL] = lv
                     else:
@@ -533,9 +560,10 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 its, _ = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra, rk,
                                                 ap, cr[CT_HAVE] > 0)
                 err = _error(n, ur, Ur, un, Un, ap, h) if its > 0 and cr[CT_HAVE] > 0 else 0.0
-                bal = scale = fsum = w_drive = w_damp = w_contact = 0.0
+                bal = scale = fsum = w_drive = w_damp = w_contact = w_visc = 0.0
                 if its > 0 and err <= ctrl[0]:
-                    bal, scale, fsum, w_drive, w_damp, w_contact = system.balance(xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs)
+                    bal, scale, fsum, w_drive, w_damp, w_contact, w_visc = system.balance(xr, ur, Xr, Ur, un, Un, h, t1, nc,
+                                                                                          st, vs)
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
                     continue
                 implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, ra, rk, uk, fk, ca, slow, w)
@@ -543,6 +571,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 acc[row, A_WCONTACT] -= w_contact
                 acc[row, A_WDAMP] += w_damp
                 acc[row, A_WDRIVE] += w_drive
+                acc[row, A_WVISC] += w_visc
                 fd[row] += fsum / n * w
                 batch.step[row] += w
                 cr[CT_J] += w
@@ -623,7 +652,7 @@ def stepper(body: str, adaptive: bool | str):
     'lattice-prony', 'spectral' or 'spectral-prony')."""
     explicit, commit, fastmath = _body(body)
     if adaptive == "implicit":
-        return implicit_stepper(explicit, commit)
+        return implicit_stepper(explicit, commit, viscoelastic.prony_be_commit if body == "lattice-prony" else None)
     return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
 
 

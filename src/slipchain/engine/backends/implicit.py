@@ -54,8 +54,15 @@ their oscillations numerically instead of by the pair damping and the contacts (
 
 Geometry: the chain (1-D, the compiled cyclic solve above), and the slab, half-space and chain2d
 (:func:`krylov_be_try`: the same Newton iteration, each linear solve by preconditioned conjugate
-gradients on :class:`SlabSystem`, Fourier-diagonal, or :class:`LatticeSystem`), with material
-'elastic', either drive, in this version.
+gradients on :class:`SlabSystem`, Fourier-diagonal, or :class:`LatticeSystem`), either drive.
+
+**Material 'prony'** (issue 28): the Maxwell arms enter the backward-Euler system exactly
+(:class:`Arms`: their exponential update is exact for the step's constant velocity, so their force
+at the step's end is linear in the unknowns, h**2 K_b becoming h (h + S) K_b); their work on the
+blocks is taken by the trapezoidal rule as the other works, and the arms are updated by the
+accepted velocities (:func:`.viscoelastic.prony_be_commit`). The explicit levels are the fold step
+at dt alone (``Config.step_levels`` = 0: the adaptive levels are not trusted with the Prony bulk,
+docs/guide/viscoelastic.md).
 """
 
 from __future__ import annotations
@@ -160,17 +167,66 @@ def solve_cyclic(a, bb, d, ox, oX, r, z):
 
 
 @nb.njit(cache=True)
-def chain_coefficients(p, h):
+def chain_coefficients(p, h, J=0, S=0.0):
     """The constant entries of A = M + h C + h**2 K for the chain (module docstring): (a0, bb, d0,
-    ox, oX) -- block diagonal (IL, IL-UL, UL) and the couplings of neighbours (IL, UL)."""
+    ox, oX) -- block diagonal (IL, IL-UL, UL) and the couplings of neighbours (IL, UL). With J > 0
+    Maxwell arms (material 'prony', :class:`Arms`) the bulk springs K, K_L, K_T enter as h (h + S) K."""
     m = p[P_M]
     meta = p[P_META]
     K, KL, KT, Kd = p[P_K], p[P_KL], p[P_KT], p[P_KD]
     h2 = h * h
+    if J > 0:
+        hb = h * (h + S)
+        return (m + hb * (2.0 * K + KT) + 3.0 * h * meta, -(hb * KT + h * meta),
+                p[P_ML] + hb * (2.0 * KL + KT) + h2 * Kd + 3.0 * h * meta, -(hb * K + h * meta), -(hb * KL + h * meta))
     a0 = m + h2 * (2.0 * K + KT) + 3.0 * h * meta
     bb = -(h2 * KT + h * meta)
     d0 = p[P_ML] + h2 * (2.0 * KL + KT + Kd) + 3.0 * h * meta
     return a0, bb, d0, -(h2 * K + h * meta), -(h2 * KL + h * meta)
+
+
+@nb.njit(cache=True)
+def chain_arms(p, mt, br, h, gx, gX, fx, fX):
+    """The chain's arms for a backward-Euler step h (:class:`Arms`, compiled): G = sum_j r_j a_j xi_j of
+    both layers into gx, gX, the bulk springs' force of G into fx, fX; returns S = sum_j r_j c_j."""
+    J = mt.shape[1]
+    S = 0.0
+    gx[:] = 0.0
+    gX[:] = 0.0
+    for j in range(J):
+        tau = mt[1, j]
+        S += mt[0, j] * (-tau * math.expm1(-h / tau))
+        ra = mt[0, j] * math.exp(-h / tau)
+        for i in range(gx.size):
+            gx[i] += ra * br[j, i]
+            gX[i] += ra * br[J + j, i]
+    bulk_forces(1, gx, gX, fx, fX, p[P_K], p[P_KL], p[P_KT], 0.0, 0.0)
+    return S
+
+
+@nb.njit(cache=True)
+def chain_arm_work(p, mt, br, ur, Ur, un, Un, h):
+    """The chain's arms' work over an accepted backward-Euler step by the trapezoidal rule: their force
+    -K_b g . v at the start (g = sum_j r_j xi_j) and at the end (g' = G + S v', :class:`Arms`)."""
+    n = ur.size
+    J = mt.shape[1]
+    gx, gX, fx, fX = np.zeros(n), np.zeros(n), np.empty(n), np.empty(n)
+    for j in range(J):
+        for i in range(n):
+            gx[i] += mt[0, j] * br[j, i]
+            gX[i] += mt[0, j] * br[J + j, i]
+    bulk_forces(1, gx, gX, fx, fX, p[P_K], p[P_KL], p[P_KT], 0.0, 0.0)
+    w = 0.0
+    for i in range(n):
+        w += fx[i] * ur[i] + fX[i] * Ur[i]
+    S = chain_arms(p, mt, br, h, gx, gX, fx, fX)
+    for i in range(n):
+        gx[i] += S * un[i]
+        gX[i] += S * Un[i]
+    bulk_forces(1, gx, gX, fx, fX, p[P_K], p[P_KL], p[P_KT], 0.0, 0.0)
+    for i in range(n):
+        w += fx[i] * un[i] + fX[i] * Un[i]
+    return 0.5 * w * h
 
 
 @nb.njit(cache=True)
@@ -183,17 +239,24 @@ def _contact_force(s, y, vstar, amp, c, meta_c):
 
 
 @nb.njit(cache=True)
-def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
+def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have, mt, br):
     """One backward-Euler step of the chain from (x, u, X, U) at time t1 - h: writes the new
     velocities into ``un``, ``Un`` and each contact's (y, sign) into ``yk``, ``sk``, touching
     nothing else. Newton starts from the velocities extrapolated with the last step's accelerations
     ``ap`` (where ``have``; a contact keeps its y where the extrapolation would change its sign).
     Returns the Newton iterations taken, or -1 where the step may not be taken by backward Euler (a
-    contact off the rising branch, or no convergence)."""
+    contact off the rising branch, or no convergence). ``mt``, ``br``: the material 'prony''s terms and
+    arms (:class:`Arms`; J = 0: elastic)."""
     n = xr.size
     m = p[P_M]
     K, KL, KT, Kd = p[P_K], p[P_KL], p[P_KT], p[P_KD]
-    a0, bb, d0, ox, oX = chain_coefficients(p, h)
+    J = mt.shape[1]
+    S = 0.0
+    fgx = np.zeros(n)  # the arms' force K_b G (J > 0)
+    fgX = np.zeros(n)
+    if J > 0:
+        S = chain_arms(p, mt, br, h, np.empty(n), np.empty(n), fgx, fgX)
+    a0, bb, d0, ox, oX = chain_coefficients(p, h, J, S)
     amp = p[P_AMP]
     c = p[P_C]
     meta_c = m * p[P_ETAC]
@@ -206,6 +269,9 @@ def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, ha
         im = i - 1 if i > 0 else n - 1
         fx = K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i])
         fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + fconst
+        if J > 0:
+            fx += fgx[i]
+            fX += fgX[i]
         rhs[2 * i] = m * ur[i] + h * fx
         rhs[2 * i + 1] = mL * Ur[i] + h * fX
         un[i] = ur[i] + h * ap[i] if have else ur[i]
@@ -469,9 +535,50 @@ class SpectralOperator:
         f = self.fft
         return f.irfft2(self.kern * f.rfft2(v.reshape(self.shape)), s=self.shape).reshape(self.n)
 
+    def apply_both(self, v: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(L v, L w) by one batched rfft2/irfft2 pair (half the calls' overhead on small grids)."""
+        f = self.fft
+        both = f.irfft2(self.kern * f.rfft2(np.stack([v, w]).reshape((2, *self.shape)), axes=(1, 2)), s=self.shape,
+                        axes=(1, 2))
+        return both[0].reshape(self.n), both[1].reshape(self.n)
+
     def energy(self, x: np.ndarray, lx: np.ndarray, d: float) -> float:
         """(1/2) (x - d) . L (x - d), given L x (a uniform shift d enters mode q = 0 alone)."""
         return 0.5 * float(np.dot(x - d, lx - self.k0 * d))
+
+
+class Arms:
+    """The Maxwell arms of a Prony bulk (material 'prony', issue 28) in a backward-Euler step.
+
+    Each arm's field follows the exponential rule of :mod:`.viscoelastic`, xi_j' = a_j xi_j + c_j w'
+    (a_j = exp(-h/tau_j), c_j = tau_j (1 - a_j); w' the step's relative velocity: the blocks' less
+    the plate's on the slab, each layer's own on the lattice), exact for a velocity constant over the
+    step, which backward Euler's is. Their force at the step's end, -K_b sum_j r_j xi_j' (K_b the
+    bulk's stiffness: the slab's L_c, the lattice's springs without the drive springs), is then
+    -K_b (G + S w') with G = sum_j r_j a_j xi_j and S = sum_j r_j c_j: linear in the unknowns, so
+    the step's matrix keeps its form with h**2 K_b replaced by h (h + S) K_b (S -> h sum_j r_j, the
+    glassy stiffness, for h << tau_j; S -> sum_j r_j tau_j, a dashpot, for h >> tau_j) and the
+    right-hand side gains -h K_b G. ``mt`` (2, J): r_j, tau_j; ``br`` the body state (rows 0 .. J-1
+    the interface layer's fields, J .. 2J-1 the upper layer's)."""
+
+    def __init__(self, mt, br):
+        self.r, self.tau = mt[0], mt[1]
+        self.J = mt.shape[1]
+        self.br = br
+
+    def setup(self, h):
+        """S and G (both layers) for a step h."""
+        a = np.exp(-h / self.tau)
+        c = -self.tau * np.expm1(-h / self.tau)
+        self.S = float(np.dot(self.r, c))
+        J = self.J
+        self.G = (np.dot(self.r * a, self.br[:J]), np.dot(self.r * a, self.br[J:2 * J]))
+        return self.S
+
+    def now(self):
+        """g = sum_j r_j xi_j of both layers at the step's start."""
+        J = self.J
+        return np.dot(self.r, self.br[:J]), np.dot(self.r, self.br[J:2 * J])
 
 
 class SlabSystem:
@@ -492,34 +599,43 @@ class SlabSystem:
     the plate's row scaled by n so that the matrix stays symmetric (and positive definite: its Schur
     complement on U' is positive)."""
 
-    def __init__(self, op: SpectralOperator, p):
+    def __init__(self, op: SpectralOperator, p, arms: Arms | None = None):
         self.op = op
         self.p = p
         self.n = op.n
         self.dead = p[P_KD] == 0.0
         self.size = self.n + 1 if self.dead else self.n
+        self.arms = arms  # material 'prony' (under the dead weight only): L_c is the bulk's
+        if arms is not None and not self.dead:
+            raise ValueError("the Prony slab runs under the dead weight only (model.capabilities)")
 
     def setup(self, xr, ur, Xr, Ur, h, t1):
         """The right-hand side at the step's start, and the velocities there as one vector."""
         p, op, n = self.p, self.op, self.n
         m, meta, k0 = p[P_M], p[P_META], op.k0
         self.h = h
+        self.hs = h + (self.arms.setup(h) if self.arms is not None else 0.0)  # h**2 L -> h (h + S) L (:class:`Arms`)
         self.cdiag = m + h * meta
         if self.dead:
             Xp = float(Xr[0])
             self.lx = op.apply(xr - Xp)  # L_c (x - X): the plate's uniform displacement enters mode q = 0 alone
-            self.bp = h * (h * k0 + meta)
-            self.ap = p[P_ML] + h * meta + h * h * k0
+            self.bp = h * (self.hs * k0 + meta)
+            self.ap = p[P_ML] + h * meta + h * self.hs * k0
+            rhs_u = m * ur - h * self.lx
             rhs_p = n * (p[P_ML] * Ur[0] + h * (p[P_FCONST] + k0 * (float(np.mean(xr)) - Xp)))
-            self.diag = np.concatenate([np.full(n, self.cdiag + h * h * op.lii), [n * self.ap]])
-            return np.concatenate([m * ur - h * self.lx, [rhs_p]]), np.concatenate([ur, Ur[:1]])
+            if self.arms is not None:  # the arms' force -L_c G, its reaction on the plate k_c(0) <G>
+                G = self.arms.G[0]
+                rhs_u -= h * op.apply(G)
+                rhs_p += n * h * k0 * float(np.mean(G))
+            self.diag = np.concatenate([np.full(n, self.cdiag + h * self.hs * op.lii), [n * self.ap]])
+            return np.concatenate([rhs_u, [rhs_p]]), np.concatenate([ur, Ur[:1]])
         self.diag = self.cdiag + h * h * op.lii
         self.lx = op.apply(xr)
         return m * ur + h * (k0 * p[P_VD] * t1 + meta * p[P_VD]) - h * self.lx, ur.copy()
 
     def matvec(self, v):
         n, h = self.n, self.h
-        w = self.cdiag * v[:n] + h * h * self.op.apply(v[:n])
+        w = self.cdiag * v[:n] + h * self.hs * self.op.apply(v[:n])
         if not self.dead:
             return w
         return np.concatenate([w - self.bp * v[n], [n * self.ap * v[n] - self.bp * np.sum(v[:n])]])
@@ -542,12 +658,15 @@ class SlabSystem:
         energy is the kinetic one, the body's (1/2) (x - d) . L (x - d), d = v_d t or the plate's X,
         and under the dead weight the plate's kinetic energy and the weight's potential -F_b n X).
         Under the dead weight the drive force and work are 0 here: the run takes the weight's work
-        from the plate's displacement, as for the explicit steps."""
+        from the plate's displacement, as for the explicit steps. With the arms (material 'prony')
+        their work on the blocks relative to the plate, -L_c g . (u - U), by the same rule (their
+        energy is not in the mechanical one: the run's W_visc, as for the explicit steps)."""
         p, op, n = self.p, self.op, self.n
         m, meta, vd, k0 = p[P_M], p[P_META], p[P_VD], op.k0
         t0 = t1 - h
         x1 = xr + h * un
-        lx, lx1 = self.lx, self.lx + h * op.apply(un)
+        lun = op.apply(un)
+        lx, lx1 = self.lx, self.lx + h * lun
         e0 = 0.5 * m * float(np.dot(ur, ur))
         e1 = 0.5 * m * float(np.dot(un, un))
         if self.dead:
@@ -558,7 +677,12 @@ class SlabSystem:
             e0 += 0.5 * n * p[P_ML] * Up * Up + op.energy(xr - Xp, lx, 0.0) - fb * Xp
             e1 += 0.5 * n * p[P_ML] * Un1 * Un1 + op.energy(x1 - X1, lx1, 0.0) - fb * X1
             w_damp = -0.5 * meta * (float(np.sum((ur - Up) ** 2)) + float(np.sum((un - Un1) ** 2))) * h
-            return _balance(p, e1 - e0, 0.0, 0.0, w_damp, h, nc, st, vs, ur, un)
+            w_visc = 0.0
+            if self.arms is not None:  # -L_c g at both ends; g' = G + S (u' - U')
+                lg0 = op.apply(self.arms.now()[0])
+                lg1 = op.apply(self.arms.G[0]) + (self.hs - h) * (lun - k0 * Un1)
+                w_visc = -0.5 * (float(np.dot(lg0, ur - Up)) + float(np.dot(lg1, un - Un1))) * h
+            return _balance(p, e1 - e0, 0.0, 0.0, w_damp, h, nc, st, vs, ur, un, w_visc)
         e0 += op.energy(xr, lx, vd * t0)
         e1 += op.energy(x1, lx1, vd * t1)
         fsum = 0.5 * k0 * (n * vd * (t0 + t1) - float(np.sum(xr)) - float(np.sum(x1)))
@@ -588,14 +712,15 @@ class LatticeSystem:
     (1 + 4 s_x + 4 s_y) + h**2 (4 K_L s_x + 4 K_LY s_y + K_T + K_d), s = sin**2(pi k/L)): with Jacobi
     alone its lattice Laplacian took 25 conjugate-gradient iterations per solve on 64 x 64."""
 
-    def __init__(self, p, shape, fft):
+    def __init__(self, p, shape, fft, arms: Arms | None = None):
         self.p = p
         self.shape = shape
         self.fft = fft
         self.n = shape[0] * shape[1]
         self.size = 2 * self.n
         self.ly = int(shape[1])
-        self.work = [np.empty(self.n) for _ in range(4)]
+        self.work = [np.empty(self.n) for _ in range(6)]
+        self.arms = arms  # material 'prony': the bulk springs (not K_d) carry the arms (:class:`Arms`)
         kx = np.arange(shape[0])[:, None]
         ky = np.arange(shape[1] // 2 + 1)[None, :]
         self.sx = np.sin(np.pi * kx / shape[0]) ** 2
@@ -603,27 +728,48 @@ class LatticeSystem:
 
     def terms(self, a, b):
         p = self.p
-        fa, fb, da, db = self.work
+        fa, fb, da, db = self.work[:4]
         lattice_terms(self.ly, p[P_K], p[P_KL], p[P_KT], p[P_KD], p[P_KY], p[P_KLY], p[P_META], a, b, fa, fb, da, db)
         return fa, fb, da, db
+
+    def bulk(self, a, b):
+        """The bulk springs' force of the fields (a, b) (the arms' stencil: no drive springs)."""
+        p = self.p
+        fa, fb = self.work[4:]
+        bulk_forces(self.ly, a, b, fa, fb, p[P_K], p[P_KL], p[P_KT], p[P_KY], p[P_KLY])
+        return fa, fb
 
     def setup(self, xr, ur, Xr, Ur, h, t1):
         p = self.p
         self.h = h
+        self.S = self.arms.setup(h) if self.arms is not None else 0.0
         fx, fX, _, _ = self.terms(xr, Xr)
         g = p[P_KD] * p[P_VD] * t1 + p[P_FCONST]
         h2 = h * h
+        hs = h * self.S
         self.upper_symbol = 1.0 / (p[P_ML] + h * p[P_META] * (1.0 + 4.0 * self.sx + 4.0 * self.sy)
-                                   + h2 * (4.0 * p[P_KL] * self.sx + 4.0 * p[P_KLY] * self.sy + p[P_KT] + p[P_KD]))
+                                   + h2 * (4.0 * p[P_KL] * self.sx + 4.0 * p[P_KLY] * self.sy + p[P_KT] + p[P_KD])
+                                   + hs * (4.0 * p[P_KL] * self.sx + 4.0 * p[P_KLY] * self.sy + p[P_KT]))
         ny = 2.0 if self.shape[1] > 1 else 0.0  # y neighbours (Ly = 1: the block itself, no bond)
         self.diag_u = p[P_M] + h * p[P_META] * (3.0 + ny) + h2 * (2.0 * p[P_K] + ny * p[P_KY] + p[P_KT])
-        return np.concatenate([p[P_M] * ur + h * fx, p[P_ML] * Ur + h * (fX + g)]), np.concatenate([ur, Ur])
+        rhs = np.concatenate([p[P_M] * ur + h * fx, p[P_ML] * Ur + h * (fX + g)])
+        if self.arms is not None:  # h (h + S) K_b on the diagonal, the arms' force K_b G on the right
+            self.diag_u += hs * (2.0 * p[P_K] + ny * p[P_KY] + p[P_KT])
+            ga, gb = self.bulk(*self.arms.G)
+            rhs[:self.n] += h * ga
+            rhs[self.n:] += h * gb
+        return rhs, np.concatenate([ur, Ur])
 
     def matvec(self, v):
         p, n, h = self.p, self.n, self.h
         u, U = v[:n], v[n:]
         fx, fX, dx, dX = self.terms(u, U)
-        return np.concatenate([p[P_M] * u - h * dx - h * h * fx, p[P_ML] * U - h * dX - h * h * fX])
+        w = np.concatenate([p[P_M] * u - h * dx - h * h * fx, p[P_ML] * U - h * dX - h * h * fX])
+        if self.arms is not None:
+            ba, bb = self.bulk(u, U)
+            w[:n] -= h * self.S * ba
+            w[n:] -= h * self.S * bb
+        return w
 
     def precondition(self, r, jd):
         n, f = self.n, self.fft
@@ -647,7 +793,8 @@ class LatticeSystem:
                      - p[P_KD] * drive * sX + 0.5 * p[P_KD] * drive * drive * self.n - p[P_FCONST] * sX)
 
     def balance(self, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs):
-        """The step's works by the trapezoidal rule and its energy residual, as :func:`step_balance`."""
+        """The step's works by the trapezoidal rule and its energy residual, as :func:`step_balance`
+        (with the arms, their work K_b g . v by the same rule, as :meth:`SlabSystem.balance`)."""
         p, n = self.p, self.n
         t0 = t1 - h
         x1, X1 = xr + h * un, Xr + h * Un
@@ -657,15 +804,23 @@ class LatticeSystem:
         w0 = float(np.dot(d0x, ur) + np.dot(d0X, Ur))
         _, _, d1x, d1X = self.terms(un, Un)
         w_damp = 0.5 * (w0 + float(np.dot(d1x, un) + np.dot(d1X, Un))) * h
-        return _balance(p, de, fsum, fsum * p[P_VD] * h, w_damp, h, nc, st, vs, ur, un)
+        w_visc = 0.0
+        if self.arms is not None:  # g' = G + S v'
+            Ga, Gb = self.arms.G
+            fa, fb = self.bulk(*self.arms.now())
+            w_visc = float(np.dot(fa, ur) + np.dot(fb, Ur))
+            fa, fb = self.bulk(Ga + self.S * un, Gb + self.S * Un)
+            w_visc = 0.5 * (w_visc + float(np.dot(fa, un) + np.dot(fb, Un))) * h
+        return _balance(p, de, fsum, fsum * p[P_VD] * h, w_damp, h, nc, st, vs, ur, un, w_visc)
 
 
-def _balance(p, de, fsum, w_drive, w_damp, h, nc, st, vs, ur, un):
-    """(energy residual, sum of the works' magnitudes, drive force sum, drive, damping and contact work)
-    of a step with energy change ``de``, the contacts' work by the trapezoidal rule."""
+def _balance(p, de, fsum, w_drive, w_damp, h, nc, st, vs, ur, un, w_visc=0.0):
+    """(energy residual, sum of the works' magnitudes, drive force sum, drive, damping, contact and
+    the arms' work) of a step with energy change ``de``, the contacts' work by the trapezoidal rule."""
     amp, c, meta_c = p[P_AMP], p[P_C], p[P_M] * p[P_ETAC]
     w_contact = 0.5 * (contact_power_at(nc, st, vs, ur, amp, c, meta_c) + contact_power_at(nc, st, vs, un, amp, c, meta_c)) * h
-    return de - (w_drive + w_damp - w_contact), abs(w_drive) + abs(w_damp) + abs(w_contact), fsum, w_drive, w_damp, w_contact
+    return (de - (w_drive + w_damp - w_contact + w_visc), abs(w_drive) + abs(w_damp) + abs(w_contact) + abs(w_visc), fsum,
+            w_drive, w_damp, w_contact, w_visc)
 
 
 def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
@@ -729,6 +884,6 @@ def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol,
     return -1, cg_its[0]
 
 
-__all__ = ["ENERGY_TOL", "NEWTON_MAX", "LatticeSystem", "SlabSystem", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "krylov_be_try", "chain_coefficients", "chain_damping", "contact_power_at",
+__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
            "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
            "step_balance"]

@@ -171,5 +171,21 @@ def slab_prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     return body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)[0], w_visc
 
 
-__all__ = ["BODY_ROWS", "bulk_forces", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def prony_be_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """A backward-Euler step's commit on the chains (integrator 'implicit', :class:`.implicit.Arms`):
+    the arms' update with the step's velocities, then the elastic body's commit (the arms' work is
+    the step's balance's, by the trapezoidal rule)."""
+    _relax(mt.shape[1], mt, br, un, Un, h)
+    return lattice_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def slab_prony_be_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
+    """A backward-Euler step's commit on the slab under the dead weight (as :func:`prony_be_commit`)."""
+    _slab_relax(mt.shape[1], mt, br, un, Un, h)
+    return body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+
+
+__all__ = ["BODY_ROWS", "bulk_forces", "prony_be_commit", "slab_prony_be_commit", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
 
