@@ -226,17 +226,19 @@ def implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, yk, sk, uk, fk, ca
     _weighted_contact_sums(nc, fk, uk, ca, slow, w)
 
 
-def implicit_stepper(explicit, commit, be_commit=None):
+def implicit_stepper(explicit, commit, prony: bool = False):
     """integrator = 'implicit' (issue 27, :mod:`.implicit`): the adaptive step up to its top level
     (``control[1]``, the explicit springs' stable step), backward Euler with everything implicit on
     the levels above it (up to ``control[4]``) while every contact is on the rising branch of eq. (1).
     Composed with the chain's body (its explicit part and commit serve the adaptive levels); the
     controller (:func:`implicit_plan`, :func:`after_explicit`, :func:`implicit_verdict`) is shared with
-    the other geometries' (:func:`krylov_implicit_advance`). ``be_commit``: the body's commit after a
-    backward-Euler step where it differs from ``commit`` (material 'prony': the arms' update,
-    :func:`.viscoelastic.prony_be_commit`; their work is the step's balance's)."""
+    the other geometries' (:func:`krylov_implicit_advance`). ``prony``: the body has Maxwell arms
+    (material 'prony': they are in the backward-Euler system, :func:`.implicit.be_try_arms`; after a
+    backward-Euler step they are updated by :func:`.viscoelastic.prony_be_commit`, their work being the
+    step's balance's)."""
     astep = adaptive_stepper(explicit, commit)
-    commit_be = commit if be_commit is None else be_commit
+    commit_be = viscoelastic.prony_be_commit if prony else commit
+    be_try = implicit.be_try_arms if prony else implicit.be_try
 
     @nb.njit(cache=True, inline="always")
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
@@ -264,8 +266,7 @@ def implicit_stepper(explicit, commit, be_commit=None):
             cut = w < (1 << lv)  # cut short by the sample's end
             h = dt0 * w
             t1 = (nstep + w) * dt0
-            its = implicit.be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, ra, rk, ap, cr[CT_HAVE] > 0,
-                                  mt, br)
+            its = be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, ra, rk, ap, cr[CT_HAVE] > 0, mt, br)
             err = 0.0
             if its > 0 and cr[CT_HAVE] > 0:
                 err = _error(n, ur, Ur, un, Un, ap, h)
@@ -273,7 +274,7 @@ def implicit_stepper(explicit, commit, be_commit=None):
             if its > 0 and err <= tol:  # the works by the trapezoidal rule, and the step's energy residual
                 bal, scale, fsum, w_drive, w_damp, w_contact = implicit.step_balance(p, xr, ur, Xr, Ur, un, Un, h, t1,
                                                                                      nc, st, vs, dampx, dampX)
-                if mt.shape[1] > 0:  # the arms' work (material 'prony')
+                if prony:  # the arms' work
                     w_visc = implicit.chain_arm_work(p, mt, br, ur, Ur, un, Un, h)
                     bal -= w_visc
                     scale += abs(w_visc)
@@ -652,7 +653,7 @@ def stepper(body: str, adaptive: bool | str):
     'lattice-prony', 'spectral' or 'spectral-prony')."""
     explicit, commit, fastmath = _body(body)
     if adaptive == "implicit":
-        return implicit_stepper(explicit, commit, viscoelastic.prony_be_commit if body == "lattice-prony" else None)
+        return implicit_stepper(explicit, commit, body == "lattice-prony")
     return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
 
 

@@ -238,76 +238,87 @@ def _contact_force(s, y, vstar, amp, c, meta_c):
     return u, s * big + meta_c * u, meta_c + big * (-2.0 * c * y) / (LN10 * vstar * pw)
 
 
-@nb.njit(cache=True)
-def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have, mt, br):
-    """One backward-Euler step of the chain from (x, u, X, U) at time t1 - h: writes the new
-    velocities into ``un``, ``Un`` and each contact's (y, sign) into ``yk``, ``sk``, touching
-    nothing else. Newton starts from the velocities extrapolated with the last step's accelerations
-    ``ap`` (where ``have``; a contact keeps its y where the extrapolation would change its sign).
-    Returns the Newton iterations taken, or -1 where the step may not be taken by backward Euler (a
-    contact off the rising branch, or no convergence). ``mt``, ``br``: the material 'prony''s terms and
-    arms (:class:`Arms`; J = 0: elastic)."""
-    n = xr.size
-    m = p[P_M]
-    K, KL, KT, Kd = p[P_K], p[P_KL], p[P_KT], p[P_KD]
-    J = mt.shape[1]
-    S = 0.0
-    fgx = np.zeros(n)  # the arms' force K_b G (J > 0)
-    fgX = np.zeros(n)
-    if J > 0:
-        S = chain_arms(p, mt, br, h, np.empty(n), np.empty(n), fgx, fgX)
-    a0, bb, d0, ox, oX = chain_coefficients(p, h, J, S)
-    amp = p[P_AMP]
-    c = p[P_C]
-    meta_c = m * p[P_ETAC]
-    drive = p[P_VD] * t1
-    fconst = p[P_FCONST]
-    mL = p[P_ML]
-    rhs = np.empty(2 * n)
-    for i in range(n):  # M v + h (g - K q) at the step's start
-        ip = i + 1 if i + 1 < n else 0
-        im = i - 1 if i > 0 else n - 1
-        fx = K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i])
-        fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + fconst
-        if J > 0:
-            fx += fgx[i]
-            fX += fgX[i]
-        rhs[2 * i] = m * ur[i] + h * fx
-        rhs[2 * i + 1] = mL * Ur[i] + h * fX
-        un[i] = ur[i] + h * ap[i] if have else ur[i]
-        Un[i] = Ur[i] + h * ap[n + i] if have else Ur[i]
-    if not start_contacts(nc, st, ur, un, ys, vs, yk, sk):
-        return -1
-    diag = np.empty(n)
-    res = np.empty(2 * n)
-    dv = np.empty(2 * n)
-    hf = np.zeros(n)  # h f(u) on the contact blocks
-    dk = np.empty(nc)  # h f'(u) of each contact
-    free = np.ones(n, dtype=np.bool_)  # blocks without a contact
-    pk = np.empty(nc)  # 10**y and exp(-c y**2) of each contact, updated multiplicatively (as newton_pass)
-    qk = np.empty(nc)
-    for k in range(nc):
-        free[st[k]] = False
-    factors(nc, c, yk, pk, qk)
-    for it in range(NEWTON_MAX):
-        for i in range(n):
-            diag[i] = a0
-        eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk)
-        for k in range(nc):
-            diag[st[k]] = a0 + dk[k]
-        _residual(n, a0, bb, d0, ox, oX, un, Un, hf, rhs, res)
-        solve_cyclic(diag, bb, d0, ox, oX, res, dv)
-        big_v = 0.0
-        for i in range(n):
-            big_v = max(big_v, abs(dv[2 * i + 1]), abs(dv[2 * i]) if free[i] else 0.0)
-            un[i] += dv[2 * i]  # contact blocks: overwritten from (y, s) below
-            Un[i] += dv[2 * i + 1]
-        big_y = update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, 2)
-        if big_y < 0.0:
+def _make_be_try(arms: bool):
+    """The chain's backward-Euler try (:data:`be_try`; ``arms``: with the Maxwell arms, :data:`be_try_arms`),
+    the arms' code compiled only where there are arms (so that the elastic try is compiled as it was
+    before them: its fastmath callees make its last bits depend on the surrounding code)."""
+
+    @nb.njit(cache=True)
+    def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have, mt, br):
+        """One backward-Euler step of the chain from (x, u, X, U) at time t1 - h: writes the new
+        velocities into ``un``, ``Un`` and each contact's (y, sign) into ``yk``, ``sk``, touching
+        nothing else. Newton starts from the velocities extrapolated with the last step's accelerations
+        ``ap`` (where ``have``; a contact keeps its y where the extrapolation would change its sign).
+        Returns the Newton iterations taken, or -1 where the step may not be taken by backward Euler (a
+        contact off the rising branch, or no convergence). ``mt``, ``br``: the material 'prony''s terms and
+        arms (:class:`Arms`; J = 0: elastic)."""
+        n = xr.size
+        m = p[P_M]
+        K, KL, KT, Kd = p[P_K], p[P_KL], p[P_KT], p[P_KD]
+        if arms:
+            fgx = np.zeros(n)  # the arms' force K_b G
+            fgX = np.zeros(n)
+            S = chain_arms(p, mt, br, h, np.empty(n), np.empty(n), fgx, fgX)
+            a0, bb, d0, ox, oX = chain_coefficients(p, h, mt.shape[1], S)
+        else:
+            a0, bb, d0, ox, oX = chain_coefficients(p, h)
+        amp = p[P_AMP]
+        c = p[P_C]
+        meta_c = m * p[P_ETAC]
+        drive = p[P_VD] * t1
+        fconst = p[P_FCONST]
+        mL = p[P_ML]
+        rhs = np.empty(2 * n)
+        for i in range(n):  # M v + h (g - K q) at the step's start
+            ip = i + 1 if i + 1 < n else 0
+            im = i - 1 if i > 0 else n - 1
+            fx = K * (xr[ip] + xr[im] - 2.0 * xr[i]) + KT * (Xr[i] - xr[i])
+            fX = KL * (Xr[ip] + Xr[im] - 2.0 * Xr[i]) + KT * (xr[i] - Xr[i]) + Kd * (drive - Xr[i]) + fconst
+            if arms:
+                fx += fgx[i]
+                fX += fgX[i]
+            rhs[2 * i] = m * ur[i] + h * fx
+            rhs[2 * i + 1] = mL * Ur[i] + h * fX
+            un[i] = ur[i] + h * ap[i] if have else ur[i]
+            Un[i] = Ur[i] + h * ap[n + i] if have else Ur[i]
+        if not start_contacts(nc, st, ur, un, ys, vs, yk, sk):
             return -1
-        if big_y < NEWTON_DY and big_v < NEWTON_DV * tol:
-            return it + 1 if finish_contacts(nc, st, vs, yk, sk, pk, un) else -1
-    return -1
+        diag = np.empty(n)
+        res = np.empty(2 * n)
+        dv = np.empty(2 * n)
+        hf = np.zeros(n)  # h f(u) on the contact blocks
+        dk = np.empty(nc)  # h f'(u) of each contact
+        free = np.ones(n, dtype=np.bool_)  # blocks without a contact
+        pk = np.empty(nc)  # 10**y and exp(-c y**2) of each contact, updated multiplicatively (as newton_pass)
+        qk = np.empty(nc)
+        for k in range(nc):
+            free[st[k]] = False
+        factors(nc, c, yk, pk, qk)
+        for it in range(NEWTON_MAX):
+            for i in range(n):
+                diag[i] = a0
+            eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk)
+            for k in range(nc):
+                diag[st[k]] = a0 + dk[k]
+            _residual(n, a0, bb, d0, ox, oX, un, Un, hf, rhs, res)
+            solve_cyclic(diag, bb, d0, ox, oX, res, dv)
+            big_v = 0.0
+            for i in range(n):
+                big_v = max(big_v, abs(dv[2 * i + 1]), abs(dv[2 * i]) if free[i] else 0.0)
+                un[i] += dv[2 * i]  # contact blocks: overwritten from (y, s) below
+                Un[i] += dv[2 * i + 1]
+            big_y = update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, 2)
+            if big_y < 0.0:
+                return -1
+            if big_y < NEWTON_DY and big_v < NEWTON_DV * tol:
+                return it + 1 if finish_contacts(nc, st, vs, yk, sk, pk, un) else -1
+        return -1
+
+    return be_try
+
+
+be_try = _make_be_try(False)
+be_try_arms = _make_be_try(True)
 
 
 @nb.njit(cache=True)
@@ -884,6 +895,6 @@ def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol,
     return -1, cg_its[0]
 
 
-__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
+__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "be_try_arms", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
            "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
            "step_balance"]
