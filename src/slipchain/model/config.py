@@ -12,7 +12,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, Literal, Mapping, Sequence
 
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from .contact_law import ContactLaw
 from .geometries import geometry_of
@@ -44,6 +44,11 @@ ALLOWED: dict[str, str] = {
     "v_d": "a number > 0 (m/s)",
     "start": "one of 'rest', 'steady'",
     "dead_weight": "a number > 0 (applied force per block in units of epsilon*f0*theta), or absent for the spring drive",
+    "top_mass": "a number > 0 (kg per interface block: what the slab's rigid top carries besides the slab, the "
+                "plate and what sits on it), or 'tester' ((1 + dead_weight) theta p_theta1 a**2 / g: the normal load's "
+                "mass and the hanging weight, issue 29), only with dead_weight on the slab; or absent (the slab alone)",
+    "p_theta1": "a number > 0 (Pa: the nominal pressure theta = 1 stands for), only with top_mass = 'tester'; or "
+                "absent (0.1 MPa)",
     "dt": "a number > 0 (s), or absent for the default of the integrator (Config.default_dt)",
     "t_total": "a number > 0 (s), or absent for an automatic run length",
     "t_max": "a number > 0 (s)",
@@ -90,6 +95,8 @@ _NOT_OFF = object()
 STABLE_FRACTION = 0.9
 DEFAULT_DT_LEVELS = 2  # dt absent: the base step lies at least 2**2 below the adaptive step's ceiling
 MAX_IMPLICIT_LEVELS = 24  # integrator = 'implicit': dt ... dt 2**24 (1.7 s at 1e-7 s), within a sample
+DEFAULT_P_THETA1 = 1e5  # Pa: the nominal pressure theta = 1 stands for with top_mass = 'tester' (issue 29)
+STANDARD_GRAVITY = 9.80665  # m/s**2
 MAX_STEP_LEVELS = 6  # integrator = 'adaptive': the step doubles at most this often (dt ... 64 dt)
 # t_max_cycles absent: the automatic length of a run that stick-slips as a whole may follow its slip
 # cycles up to this many seconds (the cap of presets/fig6-eps1.toml, 20 cycles of 1.1 s at epsilon = 1,
@@ -165,6 +172,8 @@ class Config(BaseModel):
     v_d: float = Field(1e-3, gt=0)
     start: Literal["rest", "steady"] = "rest"
     dead_weight: float | None = Field(None, gt=0)
+    top_mass: float | Literal["tester"] | None = None
+    p_theta1: float | None = Field(None, gt=0)
     geometry: Literal["chain", "chain2d", "slab", "halfspace"] = "chain"
     Ly: int = Field(1, ge=1)
     integrator: Literal["fixed", "fold", "adaptive", "implicit"] = "adaptive"
@@ -231,6 +240,7 @@ class Config(BaseModel):
                          + (f", Ly = {self.Ly})" if self.Ly > 1 else ")"))
             )
         self._check_geometry()
+        self._check_top()
         self._check_material()
         if self.output_interval < self.dt:
             raise ValueError(_message("output_interval", self.output_interval, f"at least dt = {self.dt:g}"))
@@ -301,6 +311,27 @@ class Config(BaseModel):
         if why is not None:
             key = "dead_weight" if self.dead_weight is not None else "integrator"
             raise ValueError(_message(key, getattr(self, key), f"a combination that runs: {why}"))
+
+    @field_validator("top_mass", mode="before")
+    @classmethod
+    def _top_mass_value(cls, value: Any) -> Any:
+        """A number or 'tester' (one message naming both, instead of one per member of the union)."""
+        if value is None or value == "tester" or (isinstance(value, (int, float)) and not isinstance(value, bool)):
+            return value
+        raise ValueError("neither a number nor 'tester'")
+
+    def _check_top(self) -> None:
+        """top_mass: with the dead weight on the slab only (its rigid top); p_theta1 with 'tester' only."""
+        if self.top_mass is not None:
+            if isinstance(self.top_mass, float) and not (math.isfinite(self.top_mass) and self.top_mass > 0):
+                raise ValueError(_message("top_mass", self.top_mass, ALLOWED["top_mass"]))
+            if self.dead_weight is None or self.geometry != "slab":
+                raise ValueError(_message("top_mass", self.top_mass, "absent unless dead_weight is given with geometry "
+                                          f"= 'slab' (the rigid top the weight rests on; here geometry = "
+                                          f"'{self.geometry}', dead_weight = {self.dead_weight})"))
+        if self.p_theta1 is not None and self.top_mass != "tester":
+            raise ValueError(_message("p_theta1", self.p_theta1, "absent unless top_mass = 'tester' (it sets the "
+                                      "tester's load mass)"))
 
     def _check_material(self) -> None:
         """material = 'prony': a valid Prony series and temperature; 'elastic': no Prony key."""
@@ -455,6 +486,24 @@ class Config(BaseModel):
     def m(self) -> float:
         """Interface-block mass m = rho*a**3 [kg]."""
         return self.rho * self.a**3
+
+    @property
+    def p_nominal(self) -> float:
+        """The nominal pressure p0 = theta p_theta1 [Pa] the load stands for (top_mass = 'tester'; issue 29:
+        the contact density is proportional to p0, paper p. 2)."""
+        return self.theta * (self.p_theta1 if self.p_theta1 is not None else DEFAULT_P_THETA1)
+
+    @property
+    def upper_mass(self) -> float:
+        """Mass per upper block [kg]: the chains' upper-layer block N_L m; the slab's rigid top under the dead
+        weight carries the slab, N_L m per interface block, plus ``top_mass``: with 'tester' the normal load's
+        mass p0 a**2/g (the plate and what sits on it) and the hanging weight's, dead_weight p0 a**2/g, which
+        the string moves with the slider (issue 29)."""
+        if self.top_mass is None:
+            return self.N_L * self.m
+        extra = (self.top_mass if self.top_mass != "tester"
+                 else (1.0 + self.dead_weight) * self.p_nominal * self.a**2 / STANDARD_GRAVITY)
+        return self.N_L * self.m + extra
 
     @property
     def K(self) -> float:

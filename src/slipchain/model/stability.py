@@ -268,7 +268,7 @@ def _slab_prony_stable_step(cfg) -> float:
 def plate_mode(cfg) -> tuple[np.ndarray, np.ndarray]:
     """(B, D), shape (1, 2, 2), of the slab's uniform mode under the dead weight (module docstring)."""
     kappa = cfg.a**2 * uniform_stiffness(cfg)
-    m, M, g = cfg.m, cfg.N_L * cfg.m, cfg.radiation_damping_rate
+    m, M, g = cfg.m, cfg.upper_mass, cfg.radiation_damping_rate
     B = np.array([[[kappa / m, -kappa / m], [-kappa / M, kappa / M]]])
     D = g * np.array([[[1.0, -1.0], [-m / M, m / M]]])
     return B, D

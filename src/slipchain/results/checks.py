@@ -30,7 +30,7 @@ def stored_energy(system: System, state: State) -> float:
     cfg = system.config
     x, u, X, U = state.x, state.u, state.X, state.U
     drive = cfg.v_d * state.step * cfg.dt
-    kinetic = 0.5 * cfg.m * np.sum(u * u) + 0.5 * cfg.N_L * cfg.m * np.sum(U * U)
+    kinetic = 0.5 * cfg.m * np.sum(u * u) + 0.5 * cfg.upper_mass * np.sum(U * U)
     if geometry_of(cfg).spectral:  # the quasi-static body: (1/2) sum (x - d) . (-F_el)
         from ..model.elastic import elastic_force
         from ..model.system import elastic_kernel

@@ -74,7 +74,7 @@ class Member:
 
 # Options added after 0.1.0 whose absent value (None) switches a feature off: left out of the hash
 # while off, so stores written before the option existed stay valid.
-OPTIONAL_FEATURES = ("dead_weight", "t_decide", "t_ramp", "prony_E", "prony_tau", "temperature", "T_ref", "wlf_C1",
+OPTIONAL_FEATURES = ("dead_weight", "top_mass", "p_theta1", "t_decide", "t_ramp", "prony_E", "prony_tau", "temperature", "T_ref", "wlf_C1",
                      "wlf_C2")  # absent (None): left out of the hashed text
 
 

@@ -179,7 +179,7 @@ def kernel_params(system: System) -> np.ndarray:
     p[S.P_KT] = cfg.K_T
     p[S.P_KD] = cfg.K_d
     p[S.P_M] = cfg.m
-    p[S.P_ML] = cfg.N_L * cfg.m
+    p[S.P_ML] = cfg.upper_mass
     p[S.P_META] = cfg.m * cfg.eta
     p[S.P_VD] = cfg.v_d
     p[S.P_DT] = cfg.dt
