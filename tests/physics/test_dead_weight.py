@@ -68,7 +68,8 @@ def test_a_heavy_top_under_a_step_weight_accelerates_as_newton_says(top_mass):
 
 
 def test_the_testers_top_is_the_load_and_the_hanging_weight():
-    """top_mass = 'tester': (1 + mu_a) p0 a**2 / g per block with p0 = theta p_theta1; its plate mode's
+    """top_mass = 'tester': (1 + mu_a) p0 a**2 / g per block with p0 = theta p_theta1 (absent: epsilon tau_f, so
+    that p0 a**2 is the model's normal force per block epsilon f0 theta); its plate mode's
     stable step is the linear analysis' (heavier: not below the bare slab's); bad combinations are named."""
     from slipchain.model.config import ConfigError
 
@@ -77,7 +78,8 @@ def test_the_testers_top_is_the_load_and_the_hanging_weight():
     assert cfg.p_nominal == pytest.approx(2e4)
     assert cfg.upper_mass == pytest.approx(50 * cfg.m + 1.8 * 2e4 * 1e-8 / 9.80665, rel=1e-12)
     assert cfg.dt_stable >= make_config(**base).dt_stable
-    assert make_config(**base, top_mass="tester").p_nominal == pytest.approx(0.4 * 1e5)  # the default: 0.1 MPa at theta = 1
+    # the default: the model's own normal stress epsilon tau_f at theta = 1 (p0 a**2 = epsilon f0 theta)
+    assert make_config(**base, top_mass="tester").p_nominal * 1e-8 == pytest.approx(cfg.epsilon * cfg.f0 * 0.4)
     for bad, key in ((dict(top_mass="tester", dead_weight=None), "top_mass"), (dict(p_theta1=5e4), "p_theta1"),
                      (dict(top_mass="heavy"), "top_mass"), (dict(top_mass=-1.0), "top_mass"),
                      (dict(top_mass="tester", geometry="chain2d"), "top_mass")):

@@ -48,7 +48,7 @@ ALLOWED: dict[str, str] = {
                 "plate and what sits on it), or 'tester' ((1 + dead_weight) theta p_theta1 a**2 / g: the normal load's "
                 "mass and the hanging weight, issue 29), only with dead_weight on the slab; or absent (the slab alone)",
     "p_theta1": "a number > 0 (Pa: the nominal pressure theta = 1 stands for), only with top_mass = 'tester'; or "
-                "absent (0.1 MPa)",
+                "absent (epsilon tau_f: the model's own normal stress, whose force mu_star is normalised by)",
     "dt": "a number > 0 (s), or absent for the default of the integrator (Config.default_dt)",
     "t_total": "a number > 0 (s), or absent for an automatic run length",
     "t_max": "a number > 0 (s)",
@@ -95,7 +95,6 @@ _NOT_OFF = object()
 STABLE_FRACTION = 0.9
 DEFAULT_DT_LEVELS = 2  # dt absent: the base step lies at least 2**2 below the adaptive step's ceiling
 MAX_IMPLICIT_LEVELS = 24  # integrator = 'implicit': dt ... dt 2**24 (1.7 s at 1e-7 s), within a sample
-DEFAULT_P_THETA1 = 1e5  # Pa: the nominal pressure theta = 1 stands for with top_mass = 'tester' (issue 29)
 STANDARD_GRAVITY = 9.80665  # m/s**2
 MAX_STEP_LEVELS = 6  # integrator = 'adaptive': the step doubles at most this often (dt ... 64 dt)
 # t_max_cycles absent: the automatic length of a run that stick-slips as a whole may follow its slip
@@ -490,8 +489,11 @@ class Config(BaseModel):
     @property
     def p_nominal(self) -> float:
         """The nominal pressure p0 = theta p_theta1 [Pa] the load stands for (top_mass = 'tester'; issue 29:
-        the contact density is proportional to p0, paper p. 2)."""
-        return self.theta * (self.p_theta1 if self.p_theta1 is not None else DEFAULT_P_THETA1)
+        the contact density is proportional to p0, paper p. 2). p_theta1 absent: epsilon tau_f, so that p0 a**2
+        is the normal force per block epsilon f0 theta by which mu_star and the dead weight mu_a are
+        normalised (the model's friction force and its load in one scale: 65 kPa at theta = 1 with the
+        paper's epsilon = 1e-2, the testers' range; 6.5 MPa at epsilon = 1)."""
+        return self.theta * (self.p_theta1 if self.p_theta1 is not None else self.epsilon * self.tau_f)
 
     @property
     def upper_mass(self) -> float:
