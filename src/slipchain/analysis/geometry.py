@@ -29,7 +29,7 @@ def geometry_table(ds: xr.Dataset) -> pd.DataFrame:
     avg = seed_average(ds)
     table = avg.to_dataframe().reset_index().dropna(subset=["mu"])
     cfg = base_config(ds)
-    for key in SIZE_KEYS:
+    for key in ("geometry", *SIZE_KEYS):  # not swept: the base config's (a store of one geometry)
         if key not in table:
             table[key] = getattr(cfg, key)
     table["n"] = table["n"].astype(int)
@@ -86,6 +86,7 @@ def fig6_3d_data(ds: xr.Dataset) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     table = geometry_table(ds)
     v_d1, v_d2 = drive_velocities(cfg, np.unique(table["v_d"].values))
     return table, drops(table), {"v_d1": v_d1, "v_d2": v_d2, "main": main_sizes(table, v_d1), "a": cfg.a,
+                                 "epsilon": cfg.epsilon, "integrator": cfg.integrator,
                                  "dashed_line": dashed_line(cfg, v_d2), "not_completed": not_completed(ds)}
 
 
@@ -107,6 +108,8 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     lines = ["# Fig. 6 in 3-D: mu_star(theta) on a 2-D interface (issue 13)", ""]
     if command:
         lines += [f"Command: `{command}`" + (f" ({wall})" if wall else ""), ""]
+    if "epsilon" in attrs:
+        lines += [f"epsilon = {attrs['epsilon']:g}, integrator = '{attrs['integrator']}'.", ""]
     lines += ["Seed means ± SE (seeds and time, `analysis.statistics.seed_average`); mu_star = <f_d>/(epsilon f0 "
               "theta), theta = N_c/(N Ly).", "", "## mu_star(theta) at the main size of each geometry", ""]
     mains = table[main_mask(table, main)]

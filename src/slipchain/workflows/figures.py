@@ -52,12 +52,13 @@ def fig6(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "", wall: str = "") -> list[Path]:
     """Fig. 6 in 3-D (issue 13): the figure, report.md, table.csv (seed means) and drops.csv (the load
-    effect per geometry, size and velocity) from a store sweeping geometry, theta and v_d."""
+    effect per geometry, size and velocity) from a store sweeping theta and v_d (and geometry, or one
+    geometry in its base config: presets/fig6-3d-eps1.toml)."""
     from ..analysis.geometry import fig6_3d_data, report_markdown
     from ..plots.geometry import plot_fig6_3d
     from ..results.io import write_csv, write_text_atomic
 
-    table, drop, attrs = fig6_3d_data(sweep_dataset(store, {"geometry", "theta", "v_d"}, "the Fig. 6-in-3-D figure"))
+    table, drop, attrs = fig6_3d_data(sweep_dataset(store, {"theta", "v_d"}, "the Fig. 6-in-3-D figure"))
     paths = plot_fig6_3d(table, drop, attrs, out)
     paths += [write_csv(frame, Path(out) / name, float_format="%.6g")
               for name, frame in (("table.csv", table), ("drops.csv", drop))]
