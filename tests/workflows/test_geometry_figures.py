@@ -61,11 +61,22 @@ def test_fig6_3d_from_a_sweep(tmp_path):
     assert np.isinf(drops[drops["geometry"] == "halfspace"]["H_over_L"]).all()
     report = (out / "report.md").read_text()
     assert "| 1 |" in report and "halfspace" in report and (out / "fig6-3d.png").stat().st_size > 10_000
-    # a store without a geometry dimension is refused, nothing written
-    (tmp_path / "t.toml").write_text(SWEEP.split("[[grid]]")[0] + "[[grid]]\ntheta = [0.5, 1.0]\nN = [8]\n")
+    # a store of one geometry (in its base config, as presets/fig6-3d-eps1.toml) is read as that geometry;
+    # a store without v_d is refused, nothing written
+    (tmp_path / "t.toml").write_text(SWEEP.split("[[grid]]")[0]
+                                     + 'geometry = "slab"\nLy = 8\n[[grid]]\ntheta = [0.5, 1.0]\nv_d = [0.05]\nN = [8]\n')
     _cli("sweep", str(tmp_path / "t.toml"), "--store", str(tmp_path / "s2"), "--workers", "1", "--no-progress")
-    r = _cli("figure", "fig6-3d", "--store", str(tmp_path / "s2"), "--out", str(tmp_path / "nothing"))
-    assert r.returncode == 2 and "geometry" in r.stderr and not (tmp_path / "nothing").exists()
+    r = _cli("figure", "fig6-3d", "--store", str(tmp_path / "s2"), "--out", str(tmp_path / "one"))
+    assert r.returncode == 0, r.stderr
+    one = pd.read_csv(tmp_path / "one" / "table.csv")
+    assert set(one["geometry"]) == {"slab"} and len(one) == 2 and (one["Ly"] == 8).all()
+    mu = one.set_index("theta")["mu"]
+    slab = table[(table["geometry"] == "slab") & (table["N"] == 8) & np.isclose(table["v_d"], 0.05)].set_index("theta")["mu"]
+    assert mu[1.0] == pytest.approx(slab[1.0], rel=1e-12)  # the same member as in the first store
+    (tmp_path / "u.toml").write_text(SWEEP.split("[[grid]]")[0] + "[[grid]]\ntheta = [0.5, 1.0]\nN = [8]\n")
+    _cli("sweep", str(tmp_path / "u.toml"), "--store", str(tmp_path / "s3"), "--workers", "1", "--no-progress")
+    r = _cli("figure", "fig6-3d", "--store", str(tmp_path / "s3"), "--out", str(tmp_path / "nothing"))
+    assert r.returncode == 2 and "v_d" in r.stderr and not (tmp_path / "nothing").exists()
 
 
 def test_slip_maps_of_a_slab_run(tmp_path):
