@@ -181,6 +181,7 @@ def test_default_compound_and_temperature_shift():
         make_config(material="prony", temperature=20.0 - c.C2 - 1.0)
     with pytest.raises(ConfigError, match="runs on the slab under the dead weight only"):
         make_config(material="prony", geometry="slab", N=8, Ly=8)  # the spring drive
+    make_config(material="prony", geometry="halfspace", N=8, Ly=8)  # the half-space's k(q != 0) is the rubber's
     with pytest.raises(ConfigError, match="runs with integrator = 'fold' or 'fixed'"):
         make_config(material="prony", integrator="adaptive")
 
@@ -235,3 +236,33 @@ def test_slab_stable_step_with_the_arms_holds_for_every_mode():
     assert bound < make_config(**SLAB, t_total=1e-4).dt_stable  # the glassy modulus: stiffer than E_inf alone
     with pytest.raises(ConfigError, match="largest stable step"):
         make_config(**SLAB, material="prony", t_total=1e-4, dt=1.02 * bound)
+
+
+# The half-space under the spring drive: k(q) is the rubber's, linear in the modulus, for q != 0; k(0) = kappa_d is
+# the drive springs' alone, so the arms act on every mode but the uniform one (model.viscoelastic.arm_kernel)
+
+def test_halfspace_arms_act_on_every_mode_but_the_uniform_one():
+    """A contact-free half-space (epsilon = 1e-12) from a random displacement, driven: fast arms give the
+    elastic half-space (relaxed), slow arms (a spring in parallel, unrelaxed) change every non-uniform
+    mode but leave the uniform mode -- the mean displacement, which only the drive springs hold -- to
+    round-off, and dissipate nothing; the default compound dissipates (W_bulk < 0) with the balance closed."""
+    free = dict(geometry="halfspace", N=8, Ly=8, theta=0.5, seed=3, epsilon=1e-12, eta_c=0.0, integrator="fold",
+                dt=5e-8, output_interval=1e-5, t_total=2e-4)
+    n = 64
+    x0 = 1e-7 * np.random.default_rng(1).standard_normal(n)
+
+    def go(**kw):
+        ds = simulate(build_system(make_config(**free, **kw)), State(x0.copy(), np.zeros(n), np.zeros(n), np.zeros(n), 0),
+                      progress=False)
+        assert ds.attrs["status"] == "completed", ds.attrs["message"]
+        return ds
+
+    elastic, relaxed, unrelaxed = go(), go(**_limit(1e-30)), go(**_limit(1e30))
+    xe, xr, xu = (d["x"].values for d in (elastic, relaxed, unrelaxed))
+    assert xr == pytest.approx(xe, rel=1e-9, abs=1e-18)
+    assert unrelaxed.attrs["W_bulk"] == pytest.approx(0.0, abs=1e-6 * abs(unrelaxed.attrs["W_damping"]))
+    assert xu.mean(axis=-1) == pytest.approx(xe.mean(axis=-1), rel=1e-9, abs=1e-18)  # the uniform mode: the drive's
+    de, du = xe - xe.mean(axis=-1, keepdims=True), xu - xu.mean(axis=-1, keepdims=True)
+    assert np.abs(du - de).max() > 1e-2 * np.abs(de).max()  # the other modes: stiffer
+    rubber = go(material="prony")
+    assert rubber.attrs["W_bulk"] < 0 and rubber.attrs["check_energy_balance_passed"] == 1

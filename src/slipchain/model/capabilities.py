@@ -35,10 +35,10 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
     if drive == "dead_weight" and not _GEOMETRIES[geometry].top:
         return "a half-space has no top to carry the weight (use geometry = 'slab')"
     if material == "prony":
-        if _GEOMETRIES[geometry].spectral and drive != "dead_weight":
-            return (f"material = 'prony' runs on the {geometry} under the dead weight only in this version (with the "
-                    "spring drive the uniform mode is the body in series with the drive springs, not linear in the "
-                    "modulus; give dead_weight, or use 'chain' or 'chain2d')")
+        if geometry == "slab" and drive != "dead_weight":
+            return ("material = 'prony' runs on the slab under the dead weight only in this version (with the "
+                    "spring drive its stiffness is the slab in series with the drive springs, not linear in the "
+                    "modulus; give dead_weight, or use 'halfspace', 'chain' or 'chain2d')")
         if backend != "cpu":
             return "material = 'prony' runs on the CPU only in this version"
         if integrator == "adaptive":

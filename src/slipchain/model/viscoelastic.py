@@ -116,11 +116,23 @@ def stiffness_ratio(cfg) -> float:
     return 1.0 + float(np.sum(cfg.prony_E)) / cfg.E
 
 
+def arm_kernel(cfg, kern: np.ndarray) -> np.ndarray:
+    """The kernel a**2 k(q) (rfft2 grid) the Maxwell arms of a slab or half-space act through: the body's
+    ``kern`` where it is the rubber's, linear in the modulus -- every q on the slab under the dead weight
+    (the clamped top is the plate), every q but 0 on the half-space under the spring drive (k(0) =
+    kappa_d is the drive springs' alone)."""
+    if cfg.dead_weight is not None:
+        return kern
+    out = np.array(kern, copy=True)
+    out[0, 0] = 0.0
+    return out
+
+
 def exponential_weights(h: float, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(a_j, tau_j (1 - a_j) / h) of the update over a step h (module docstring)."""
     a = np.exp(-h / np.asarray(tau))
     return a, np.asarray(tau) * -np.expm1(-h / np.asarray(tau)) / h
 
 
-__all__ = ["DEFAULT_COMPOUND", "T_REF", "TG", "Compound", "exponential_weights", "relaxation", "shift_factor",
+__all__ = ["DEFAULT_COMPOUND", "T_REF", "TG", "Compound", "arm_kernel", "exponential_weights", "relaxation", "shift_factor",
            "stiffness_ratio", "storage_loss", "terms", "wlf_at"]

@@ -65,11 +65,12 @@ def arm_energy(system: System, state: State) -> float:
     if cfg.material != "prony" or state.xi is None:
         return 0.0
     r = np.asarray(cfg.prony_E) / cfg.E
-    if geometry_of(cfg).spectral:  # the slab under the dead weight: xi relative to the plate, U = (1/2) xi . a^2 k_c xi
+    if geometry_of(cfg).spectral:  # xi relative to the plate (dead weight), U = (1/2) xi . a^2 k xi, k the arms' kernel
         from ..model.elastic import elastic_force
         from ..model.system import elastic_kernel
+        from ..model.viscoelastic import arm_kernel
 
-        kern = elastic_kernel(cfg)
+        kern = arm_kernel(cfg, elastic_kernel(cfg))
         g = state.xi[0].reshape(r.size, cfg.N, cfg.Ly)
         return float(sum(-0.5 * r[j] * np.sum(g[j] * elastic_force(g[j], 0.0, kern, 1.0)) for j in range(r.size)))
     return float(sum(r[j] * bulk_energy(cfg, state.xi[0, j], state.xi[1, j]) for j in range(r.size)))

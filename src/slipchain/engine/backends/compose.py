@@ -448,9 +448,11 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
         return fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(b, n)
 
     J = batch.material.shape[2] if batch.material is not None else 0
-    if J:  # material 'prony' (under the dead weight): the arms' force too, kept in work row 2J + 2 (.viscoelastic)
+    if J:  # material 'prony': the arms' force too, kept in work row 2J + 2 (.viscoelastic)
         r = batch.material[:, 0, :]
-        neg2 = np.concatenate([neg, neg])
+        arms = neg.copy()
+        arms[~(batch.params[:, P_KD] == 0.0), 0, 0] = 0.0  # spring drive (the half-space): k(0) is the drive springs'
+        neg2 = np.concatenate([neg, arms])
 
         def force():  # noqa: F811 - the viscoelastic slab's
             g = np.einsum("bj,bjn->bn", r, batch.bstate[:, :J])
@@ -537,7 +539,10 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 return no_force
             if not prony:
                 return -op.apply(xr - Xr if dead else xr)[None, :]
-            le, la = op.apply_both(xr - Xr, arms.now()[0])
+            g = arms.now()[0]
+            le, la = op.apply_both(xr - Xr, g)
+            if not dead:  # the arms act through L less its uniform mode (the drive springs': the half-space)
+                la -= op.k0 * float(np.mean(g))
             batch.bstate[row, 2 * J + 2] = -la
             return -(le + la)[None, :]
 

@@ -616,16 +616,17 @@ class SlabSystem:
         self.n = op.n
         self.dead = p[P_KD] == 0.0
         self.size = self.n + 1 if self.dead else self.n
-        self.arms = arms  # material 'prony' (under the dead weight only): L_c is the bulk's
-        if arms is not None and not self.dead:
-            raise ValueError("the Prony slab runs under the dead weight only (model.capabilities)")
+        # material 'prony': the arms act through L_c under the dead weight, through L less its uniform mode
+        # (the drive springs' k(0) = kappa_d: the half-space) under the spring drive (model.viscoelastic.arm_kernel)
+        self.arms = arms
 
     def setup(self, xr, ur, Xr, Ur, h, t1):
         """The right-hand side at the step's start, and the velocities there as one vector."""
         p, op, n = self.p, self.op, self.n
         m, meta, k0 = p[P_M], p[P_META], op.k0
         self.h = h
-        self.hs = h + (self.arms.setup(h) if self.arms is not None else 0.0)  # h**2 L -> h (h + S) L (:class:`Arms`)
+        self.S = self.arms.setup(h) if self.arms is not None else 0.0
+        self.hs = h + self.S  # h**2 L -> h (h + S) L (:class:`Arms`)
         self.cdiag = m + h * meta
         if self.dead:
             Xp = float(Xr[0])
@@ -640,14 +641,22 @@ class SlabSystem:
                 rhs_p += n * h * k0 * float(np.mean(G))
             self.diag = np.concatenate([np.full(n, self.cdiag + h * self.hs * op.lii), [n * self.ap]])
             return np.concatenate([rhs_u, [rhs_p]]), np.concatenate([ur, Ur[:1]])
-        self.diag = self.cdiag + h * h * op.lii
         self.lx = op.apply(xr)
-        return m * ur + h * (k0 * p[P_VD] * t1 + meta * p[P_VD]) - h * self.lx, ur.copy()
+        rhs = m * ur + h * (k0 * p[P_VD] * t1 + meta * p[P_VD]) - h * self.lx
+        if self.arms is None:
+            self.diag = self.cdiag + h * h * op.lii
+            return rhs, ur.copy()
+        # the arms through L less its uniform mode: h (h + S) L - h S k(0) P_0, and -h (L G - k(0) <G>)
+        G = self.arms.G[0]
+        self.diag = self.cdiag + h * self.hs * op.lii - h * self.S * k0 / n
+        return rhs - h * (op.apply(G) - k0 * float(np.mean(G))), ur.copy()
 
     def matvec(self, v):
         n, h = self.n, self.h
         w = self.cdiag * v[:n] + h * self.hs * self.op.apply(v[:n])
         if not self.dead:
+            if self.arms is not None:
+                w -= h * self.S * self.op.k0 * float(np.mean(v[:n]))
             return w
         return np.concatenate([w - self.bp * v[n], [n * self.ap * v[n] - self.bp * np.sum(v[:n])]])
 
@@ -698,7 +707,13 @@ class SlabSystem:
         e1 += op.energy(x1, lx1, vd * t1)
         fsum = 0.5 * k0 * (n * vd * (t0 + t1) - float(np.sum(xr)) - float(np.sum(x1)))
         w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
-        return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un)
+        w_visc = 0.0
+        if self.arms is not None:  # -L_arm g at both ends (L less its uniform mode); g' = G + S u'
+            g0, G = self.arms.now()[0], self.arms.G[0]
+            lg0 = op.apply(g0) - k0 * float(np.mean(g0))
+            lg1 = op.apply(G) - k0 * float(np.mean(G)) + self.S * (lun - k0 * float(np.mean(un)))
+            w_visc = -0.5 * (float(np.dot(lg0, ur)) + float(np.dot(lg1, un))) * h
+        return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un, w_visc)
 
 
 def lattice_terms(ly, K, KL, KT, Kd, KY, KLY, meta, a, b, fa, fb, da, db):

@@ -129,6 +129,9 @@ def prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
 # to the plate (rows 0 .. J-1 of the body state; rows J .. 2J-1 unused). The FFT driver
 # (:func:`.compose.fft_advance`) adds it to the elastic force it hands the body and keeps it in the
 # work row 2J + 2; the plate feels its reaction through the force's mean, as the elastic one's.
+# The half-space under the spring drive: k(q) = G q (...) is the rubber's, linear in the modulus, for
+# every q != 0, and k(0) = kappa_d is the drive springs' alone, so the arms act on every mode but the
+# uniform one (:func:`slipchain.model.viscoelastic.arm_kernel`); there is no plate (U = 0).
 # The radiation damping stays at the relaxed modulus (c_s from E_inf), as the drive springs do in
 # the chains.
 
