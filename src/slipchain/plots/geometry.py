@@ -87,8 +87,10 @@ def plot_fig6_3d(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, out: str 
     ax.set_ylabel(r"$\mu^*(\theta_{max}) / \mu^*(\theta_{min})$ at $v_{d1}$")
     ax.set_title("(c) the load effect against the slab's thickness")
     ax.legend(fontsize=7, loc="best")
+    eps = attrs.get("epsilon", 1e-2)
+    eps_text = r"10^{-2}" if eps == 1e-2 else f"{eps:g}"
     fig.suptitle("Fig. 6 in 3-D: a 2-D interface under 2-D chains and under an elastic slab "
-                 r"($\eta_c = 0.1\,\omega_0$, $\varepsilon = 10^{-2}$)", fontsize=10)
+                 rf"($\eta_c = 0.1\,\omega_0$, $\varepsilon = {eps_text}$)", fontsize=10)
     fig.tight_layout()
     return save_figure(fig, out, "fig6-3d")
 
