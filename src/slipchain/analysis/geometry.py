@@ -105,7 +105,9 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     """report.md: the main Fig. 6-in-3-D table, the load effect per geometry and velocity, the
     finite-size check and the slab-thickness dependence."""
     v_d1, v_d2, main = attrs["v_d1"], attrs["v_d2"], attrs["main"]
-    lines = ["# Fig. 6 in 3-D: mu_star(theta) on a 2-D interface (issue 13)", ""]
+    eps = attrs.get("epsilon", 1e-2)
+    lines = ["# Fig. 6 in 3-D: mu_star(theta) on a 2-D interface (issue 13)" if eps == 1e-2 else
+             f"# Fig. 6 in 3-D at epsilon = {eps:g}: mu_star(theta) on a 2-D interface", ""]
     if command:
         lines += [f"Command: `{command}`" + (f" ({wall})" if wall else ""), ""]
     if "epsilon" in attrs:
