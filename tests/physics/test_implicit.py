@@ -287,16 +287,16 @@ def _prony_pair(cfg):
 
 
 def test_prony_chain_agrees_with_the_fold_step():
-    """The chain with the default compound at epsilon = 1, steady start, 0.3 s (the start event and
+    """The chain with the default compound at epsilon = 1, steady start, 0.15 s (the start event and
     the creep after it): the drive force agrees with the fold step at 1e-7 s sample by sample, the
     bulk's dissipation W_bulk and the energy balance too, in fewer steps; Config takes no adaptive
     level (the explicit steps are the fold step)."""
-    cfg = dict(EPS1, material="prony", output_interval=1e-3, t_total=0.3)
+    cfg = dict(EPS1, material="prony", output_interval=1e-3, t_total=0.15)
     assert make_config(**cfg, integrator="implicit").step_levels == 0
     imp, fold = _prony_pair(cfg)
     fi, ff = imp.f_d.values, fold.f_d.values
     assert np.abs(fi - ff).max() < 1e-3 * ff.max(), np.abs(fi - ff).max() / ff.max()
-    steps = _control(dict(cfg, integrator="implicit"), 300)[2]
+    steps = _control(dict(cfg, integrator="implicit"), 150)[2]
     assert steps < 0.2 * cfg["t_total"] / cfg["dt"], steps
 
 
@@ -304,7 +304,7 @@ def test_prony_slab_under_the_dead_weight_agrees_with_the_fold_step():
     """The slab under the dead weight with the default compound (the arms act through L_c, their
     reaction on the plate), epsilon = 1, from rest: the plate's path agrees with the fold step."""
     cfg = dict(geometry="slab", N=8, Ly=8, N_L=5, theta=1.0, eta_c=1e5, v_d=1e-3, dt=1e-7, epsilon=1.0, seed=0,
-               output_interval=1e-3, t_total=0.02, dead_weight=0.3, start="rest", material="prony")
+               output_interval=1e-3, t_total=0.01, dead_weight=0.3, start="rest", material="prony")
     imp, fold = _prony_pair(cfg)
     assert np.abs(imp.X_mean.values - fold.X_mean.values).max() < 1e-6 * np.abs(fold.X_mean.values).max()
 
