@@ -1,6 +1,7 @@
 """Issue 29, a pilot: the tester's top on a thick viscoelastic slab, pulled by a dead weight.
 
-A slab of thickness H = 50 a (the tester's ~0.5 cm block) on an L x L interface, epsilon = 1, the
+A slab of thickness H = 50 a (the tester's ~0.5 cm block) on an L x L interface, epsilon = 1 (or
+``--epsilon``), the
 default compound at 20 °C, the implicit stepper, its rigid top carrying the tester's load and hanging
 weight (``top_mass = "tester"``: (1 + mu_a) p0 a**2 / g per block, p0 = theta p_theta1; p_theta1 absent
 is epsilon tau_f, the model's own normal stress), from rest, the weight applied over ``--ramp`` seconds
@@ -31,12 +32,14 @@ def main() -> None:
     ap.add_argument("--t", type=float, default=0.3, help="simulated seconds")
     ap.add_argument("--ramp", type=float, default=1e-3, help="the weight's ramp (s); one sample: at once")
     ap.add_argument("--p-theta1", type=float, default=None, help="Pa at theta = 1 (absent: epsilon tau_f)")
+    ap.add_argument("--epsilon", type=float, default=1.0)
     args = ap.parse_args()
     extra = {} if args.p_theta1 is None else {"p_theta1": args.p_theta1}
-    cfg = make_config(geometry="slab", N=args.L, Ly=args.L, N_L=50, epsilon=1.0, material="prony",
+    cfg = make_config(geometry="slab", N=args.L, Ly=args.L, N_L=50, epsilon=args.epsilon, material="prony",
                       integrator="implicit", dt=1e-7, seed=0, theta=args.theta, dead_weight=args.mu_a,
                       top_mass="tester", start="rest", output_interval=1e-3, t_total=args.t, t_ramp=args.ramp, **extra)
-    print(f"# {platform.processor() or platform.machine()}; {args.L} x {args.L}, H = 50 a, mu_a = {args.mu_a:g}, "
+    print(f"# {platform.processor() or platform.machine()}; {args.L} x {args.L}, H = 50 a, epsilon = {args.epsilon:g}, "
+          f"mu_a = {args.mu_a:g}, "
           f"theta = {args.theta:g}, ramp {args.ramp:g} s: top {cfg.upper_mass:.3g} kg per block "
           f"({cfg.upper_mass / cfg.m:.3g} m), p0 = {cfg.p_nominal:.3g} Pa", flush=True)
     t0 = time.perf_counter()
