@@ -38,7 +38,7 @@ def _state():
 def _arm_force(mt, br, cfg=CFG):
     """The arms' force on every block: the engine's own pieces (combined field, bulk stencil)."""
     gx, gX, fx, fX = br[2 * J], br[2 * J + 1], br[2 * J + 2], br[2 * J + 3]
-    ve._combined(J, mt, br, gx, gX)
+    ve.combined_fields(J, mt, br, gx, gX)
     ve.bulk_forces(1, gx, gX, fx, fX, cfg.K, cfg.K_L, cfg.K_T, 0.0, 0.0)
     return fx.copy(), fX.copy()
 

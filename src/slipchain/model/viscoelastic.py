@@ -116,15 +116,13 @@ def stiffness_ratio(cfg) -> float:
     return 1.0 + float(np.sum(cfg.prony_E)) / cfg.E
 
 
-def arm_kernel(cfg, kern: np.ndarray) -> np.ndarray:
-    """The kernel a**2 k(q) (rfft2 grid) the Maxwell arms of a slab or half-space act through: the body's
-    ``kern`` where it is the rubber's, linear in the modulus -- every q on the slab under the dead weight
-    (the clamped top is the plate), every q but 0 on the half-space under the spring drive (k(0) =
-    kappa_d is the drive springs' alone)."""
-    if cfg.dead_weight is not None:
-        return kern
+def arm_kernel(kern: np.ndarray, dead) -> np.ndarray:
+    """The kernel a**2 k(q) (rfft2 grid; leading axes: rows) the Maxwell arms of a slab or half-space act
+    through: the body's ``kern`` where it is the rubber's, linear in the modulus -- every q on the slab
+    under the dead weight (``dead``, per row: the clamped top is the plate), every q but 0 under the
+    spring drive (the half-space: k(0) = kappa_d is the drive springs' alone). A copy."""
     out = np.array(kern, copy=True)
-    out[0, 0] = 0.0
+    out[..., 0, 0] = np.where(dead, out[..., 0, 0], 0.0)
     return out
 
 

@@ -70,7 +70,7 @@ def arm_energy(system: System, state: State) -> float:
         from ..model.system import elastic_kernel
         from ..model.viscoelastic import arm_kernel
 
-        kern = arm_kernel(cfg, elastic_kernel(cfg))
+        kern = arm_kernel(elastic_kernel(cfg), cfg.dead_weight is not None)
         g = state.xi[0].reshape(r.size, cfg.N, cfg.Ly)
         return float(sum(-0.5 * r[j] * np.sum(g[j] * elastic_force(g[j], 0.0, kern, 1.0)) for j in range(r.size)))
     return float(sum(r[j] * bulk_energy(cfg, state.xi[0, j], state.xi[1, j]) for j in range(r.size)))

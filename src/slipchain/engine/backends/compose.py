@@ -51,6 +51,7 @@ import numba as nb
 import numpy as np
 
 from ...model.geometries import GEOMETRIES
+from ...model.viscoelastic import arm_kernel
 from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_DT,
                       P_ETAC, P_FOLD, P_KD, P_M, P_SLOW, P_VD)
 from . import implicit, spectral, viscoelastic
@@ -450,9 +451,7 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     J = batch.material.shape[2] if batch.material is not None else 0
     if J:  # material 'prony': the arms' force too, kept in work row 2J + 2 (.viscoelastic)
         r = batch.material[:, 0, :]
-        arms = neg.copy()
-        arms[~(batch.params[:, P_KD] == 0.0), 0, 0] = 0.0  # spring drive (the half-space): k(0) is the drive springs'
-        neg2 = np.concatenate([neg, arms])
+        neg2 = np.concatenate([neg, arm_kernel(neg, batch.params[:, P_KD] == 0.0)])  # (the half-space: not k(0))
 
         def force():  # noqa: F811 - the viscoelastic slab's
             g = np.einsum("bj,bjn->bn", r, batch.bstate[:, :J])
@@ -540,9 +539,8 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
             if not prony:
                 return -op.apply(xr - Xr if dead else xr)[None, :]
             g = arms.now()[0]
-            le, la = op.apply_both(xr - Xr, g)
-            if not dead:  # the arms act through L less its uniform mode (the drive springs': the half-space)
-                la -= op.k0 * float(np.mean(g))
+            le, lg = op.apply_both(xr - Xr, g)
+            la = system.arm_part(lg, g)
             batch.bstate[row, 2 * J + 2] = -la
             return -(le + la)[None, :]
 

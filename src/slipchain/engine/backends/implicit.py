@@ -73,7 +73,7 @@ import numba as nb
 import numpy as np
 
 from .cpu import scaled_exp
-from .viscoelastic import bulk_forces
+from .viscoelastic import bulk_forces, combined_fields
 from ..scheme import (FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_M, P_META, P_ML, P_VD,
                       Y_LOG, Y_P, Y_Q)
 
@@ -209,12 +209,8 @@ def chain_arm_work(p, mt, br, ur, Ur, un, Un, h):
     """The chain's arms' work over an accepted backward-Euler step by the trapezoidal rule: their force
     -K_b g . v at the start (g = sum_j r_j xi_j) and at the end (g' = G + S v', :class:`Arms`)."""
     n = ur.size
-    J = mt.shape[1]
-    gx, gX, fx, fX = np.zeros(n), np.zeros(n), np.empty(n), np.empty(n)
-    for j in range(J):
-        for i in range(n):
-            gx[i] += mt[0, j] * br[j, i]
-            gX[i] += mt[0, j] * br[J + j, i]
+    gx, gX, fx, fX = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    combined_fields(mt.shape[1], mt, br, gx, gX)
     bulk_forces(1, gx, gX, fx, fX, p[P_K], p[P_KL], p[P_KT], 0.0, 0.0)
     w = 0.0
     for i in range(n):
@@ -620,6 +616,12 @@ class SlabSystem:
         # (the drive springs' k(0) = kappa_d: the half-space) under the spring drive (model.viscoelastic.arm_kernel)
         self.arms = arms
 
+    def arm_part(self, lv, v):
+        """K_b v, given L v: the arms act through L_c itself under the dead weight, through L less its
+        uniform mode under the spring drive (the drive springs' k(0) = kappa_d: the half-space;
+        :func:`slipchain.model.viscoelastic.arm_kernel`)."""
+        return lv if self.dead else lv - self.op.k0 * float(np.mean(v))
+
     def setup(self, xr, ur, Xr, Ur, h, t1):
         """The right-hand side at the step's start, and the velocities there as one vector."""
         p, op, n = self.p, self.op, self.n
@@ -628,6 +630,9 @@ class SlabSystem:
         self.S = self.arms.setup(h) if self.arms is not None else 0.0
         self.hs = h + self.S  # h**2 L -> h (h + S) L (:class:`Arms`)
         self.cdiag = m + h * meta
+        if self.arms is not None:  # the arms' force -K_b G (kept for the balance)
+            G = self.arms.G[0]
+            self.lG = self.arm_part(op.apply(G), G)
         if self.dead:
             Xp = float(Xr[0])
             self.lx = op.apply(xr - Xp)  # L_c (x - X): the plate's uniform displacement enters mode q = 0 alone
@@ -635,9 +640,8 @@ class SlabSystem:
             self.ap = p[P_ML] + h * meta + h * self.hs * k0
             rhs_u = m * ur - h * self.lx
             rhs_p = n * (p[P_ML] * Ur[0] + h * (p[P_FCONST] + k0 * (float(np.mean(xr)) - Xp)))
-            if self.arms is not None:  # the arms' force -L_c G, its reaction on the plate k_c(0) <G>
-                G = self.arms.G[0]
-                rhs_u -= h * op.apply(G)
+            if self.arms is not None:  # ... and its reaction on the plate, k_c(0) <G>
+                rhs_u -= h * self.lG
                 rhs_p += n * h * k0 * float(np.mean(G))
             self.diag = np.concatenate([np.full(n, self.cdiag + h * self.hs * op.lii), [n * self.ap]])
             return np.concatenate([rhs_u, [rhs_p]]), np.concatenate([ur, Ur[:1]])
@@ -646,10 +650,9 @@ class SlabSystem:
         if self.arms is None:
             self.diag = self.cdiag + h * h * op.lii
             return rhs, ur.copy()
-        # the arms through L less its uniform mode: h (h + S) L - h S k(0) P_0, and -h (L G - k(0) <G>)
-        G = self.arms.G[0]
+        # the arms through L less its uniform mode: h (h + S) L - h S k(0) P_0
         self.diag = self.cdiag + h * self.hs * op.lii - h * self.S * k0 / n
-        return rhs - h * (op.apply(G) - k0 * float(np.mean(G))), ur.copy()
+        return rhs - h * self.lG, ur.copy()
 
     def matvec(self, v):
         n, h = self.n, self.h
@@ -697,23 +700,25 @@ class SlabSystem:
             e0 += 0.5 * n * p[P_ML] * Up * Up + op.energy(xr - Xp, lx, 0.0) - fb * Xp
             e1 += 0.5 * n * p[P_ML] * Un1 * Un1 + op.energy(x1 - X1, lx1, 0.0) - fb * X1
             w_damp = -0.5 * meta * (float(np.sum((ur - Up) ** 2)) + float(np.sum((un - Un1) ** 2))) * h
-            w_visc = 0.0
-            if self.arms is not None:  # -L_c g at both ends; g' = G + S (u' - U')
-                lg0 = op.apply(self.arms.now()[0])
-                lg1 = op.apply(self.arms.G[0]) + (self.hs - h) * (lun - k0 * Un1)
-                w_visc = -0.5 * (float(np.dot(lg0, ur - Up)) + float(np.dot(lg1, un - Un1))) * h
+            w_visc = self._arm_work(ur - Up, un - Un1, lun - k0 * Un1, h)
             return _balance(p, e1 - e0, 0.0, 0.0, w_damp, h, nc, st, vs, ur, un, w_visc)
         e0 += op.energy(xr, lx, vd * t0)
         e1 += op.energy(x1, lx1, vd * t1)
         fsum = 0.5 * k0 * (n * vd * (t0 + t1) - float(np.sum(xr)) - float(np.sum(x1)))
         w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
-        w_visc = 0.0
-        if self.arms is not None:  # -L_arm g at both ends (L less its uniform mode); g' = G + S u'
-            g0, G = self.arms.now()[0], self.arms.G[0]
-            lg0 = op.apply(g0) - k0 * float(np.mean(g0))
-            lg1 = op.apply(G) - k0 * float(np.mean(G)) + self.S * (lun - k0 * float(np.mean(un)))
-            w_visc = -0.5 * (float(np.dot(lg0, ur)) + float(np.dot(lg1, un))) * h
+        w_visc = self._arm_work(ur, un, lun, h)
         return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un, w_visc)
+
+    def _arm_work(self, w0, w1, lw1, h):
+        """The arms' work on the blocks over the step by the trapezoidal rule, -K_b g . w at both ends (w
+        the velocity the arms act on: relative to the plate under the dead weight), g' = G + S w' (0
+        without arms); ``lw1`` = L w'."""
+        if self.arms is None:
+            return 0.0
+        g0 = self.arms.now()[0]
+        lg0 = self.arm_part(self.op.apply(g0), g0)
+        lg1 = self.lG + self.S * self.arm_part(lw1, w1)
+        return -0.5 * (float(np.dot(lg0, w0)) + float(np.dot(lg1, w1))) * h
 
 
 def lattice_terms(ly, K, KL, KT, Kd, KY, KLY, meta, a, b, fa, fb, da, db):

@@ -36,7 +36,7 @@ from .spectral import body_commit, body_explicit
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _combined(J, mt, br, gx, gX):
+def combined_fields(J, mt, br, gx, gX):
     """g = sum_j r_j xi_j of both layers into gx, gX."""
     n = gx.size
     for i in range(n):
@@ -106,7 +106,7 @@ def prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t
     """The viscoelastic chains' explicit part (module docstring); returns the drive force sum."""
     J = mt.shape[1]
     gx, gX, fx, fX = br[2 * J], br[2 * J + 1], br[2 * J + 2], br[2 * J + 3]
-    _combined(J, mt, br, gx, gX)
+    combined_fields(J, mt, br, gx, gX)
     ly = int(p[P_LY]) if p[P_LAT] > 0.0 else 1
     bulk_forces(ly, gx, gX, fx, fX, p[P_K], p[P_KL], p[P_KT], p[P_KY], p[P_KLY])
     fsum = lattice_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t)
@@ -190,5 +190,5 @@ def slab_prony_be_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     return body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
 
 
-__all__ = ["BODY_ROWS", "bulk_forces", "prony_be_commit", "slab_prony_be_commit", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
+__all__ = ["BODY_ROWS", "bulk_forces", "combined_fields", "prony_be_commit", "slab_prony_be_commit", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
 
