@@ -325,3 +325,46 @@ def test_cli_mu_max_stopped_by_sigterm_keeps_its_runs_and_resumes_to_the_same_ta
         assert r.returncode == 0, r.stderr
     for name in ("mu_max.csv", "evaluations.csv"):
         assert (out / name).read_text() == (whole / name).read_text()
+
+
+def test_a_plan_run_in_batches_equals_one_run_per_task_and_its_sweep_store_reads_back(tmp_path, monkeypatch):
+    """`--batch-size` (issue 29: one FFT per step for a batch of slab runs): the rounds' runs advanced
+    together in tasks of two give the tables of one run per task, bit for bit; and a sweep over
+    dead_weight reads back as the same evaluations (store_evaluations)."""
+    from distributed import Client, LocalCluster
+
+    from slipchain.sweeps import executor
+    from slipchain.sweeps.executor import run_sweep
+    from slipchain.sweeps.definition import make_sweep
+    from slipchain.workflows.dead_weight import load_plan, run_plan, store_evaluations
+
+    plan_file = tmp_path / "plan.toml"
+    plan_file.write_text('name = "t"\n[base]\nN = 11\ndelta = 0.0\nstart = "steady"\nt_total = 5e-3\n'
+                         "[bisection]\ntheta = [1.0, 0.5]\nseeds = 2\nlo = 0.5\nhi = 1.5\ntol = 0.05\n")
+    plan = load_plan(plan_file)
+    sizes = []
+    real = executor.run_sweep
+
+    def spy(*args, **kwargs):
+        sizes.append(kwargs.get("batch_size"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(executor, "run_sweep", spy)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=":0") as cluster, Client(cluster) as client:
+        one = run_plan(plan, tmp_path / "one", client=client, progress=False)
+        two = run_plan(plan, tmp_path / "two", client=client, progress=False, batch_size=2)
+        assert set(sizes) == {None, 2}  # every round of the second call went out in batches of two
+        pd_one, pd_two = one.evaluations, two.evaluations
+        assert pd_one.equals(pd_two) and one.table.equals(two.table)
+        # the same runs as one sweep over dead_weight: the same classification and velocities
+        runs = pd_one[pd_one["theta"] == 1.0]
+        sweep = make_sweep({"name": "dw", "base": {"N": 11, "delta": 0.0, "start": "steady", "t_total": 5e-3,
+                                                   "dead_weight": 0.5},
+                            "grid": {"theta": [1.0], "seed": [0, 1], "dead_weight": sorted(set(runs["mu_a"]))}})
+        run_sweep(sweep, tmp_path / "store", client=client, progress=False)
+    got = store_evaluations(tmp_path / "store")
+    both = runs.merge(got, on=["seed", "mu_a"], suffixes=("", "_sweep"))
+    assert len(both) == len(runs) and (both["source_sweep"] == "sweep").all()
+    assert (both["velocity_status"] == both["velocity_status_sweep"]).all()
+    assert np.array_equal(both["velocity_m_s"].to_numpy(float), both["velocity_m_s_sweep"].to_numpy(float), equal_nan=True)

@@ -28,6 +28,7 @@ def mu_max(
     progress: ProgressOpt = None,
     dashboard: DashboardOpt = False,
     backend: BackendOpt = BackendName.CPU,
+    batch_size: Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Runs per task, advanced together (default 1; 256 on the GPU): one FFT per step for a batch of slab runs.")] = None,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the plan, say what it would bisect, and stop: "
                                           "nothing is run or written.")] = False,
 ) -> None:
@@ -47,7 +48,7 @@ def mu_max(
                       + f"; results would go to {out_dir}. Nothing run or written (--dry-run).")
             return
         result = run_plan(the_plan, out_dir, scheduler=scheduler, n_workers=workers, backend=backend, progress=progress,
-                          announce=announce_dashboard(dashboard))
+                          announce=announce_dashboard(dashboard), batch_size=batch_size)
     except ConfigError as e:  # rejected before anything ran: nothing written
         fail(str(e))
     except (BracketError, StoreWriteError) as e:  # found by running: the finished runs are kept in OUT/rounds

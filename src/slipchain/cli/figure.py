@@ -173,3 +173,23 @@ def mu_max(
         wrote(mu_max_figure(result, out_dir, spring))
     except ConfigError as e:
         fail(str(e))
+
+
+@figure_app.command("ladder")
+def ladder(
+    ladder_file: Annotated[Path, typer.Option("--ladder", help="A ladder file (TOML: [[rung]] tables, e.g. docs/ladder/ladder.toml).")],
+    out_dir: OutOpt,
+) -> None:
+    """The ladder of issue 29: the load effect at each realism step, one table (ladder.csv) and one figure."""
+    from ..workflows.ladder import ladder_figure, ladder_table
+
+    if not ladder_file.is_file():
+        fail(f"--ladder {str(ladder_file)!r}: no such file; expected a ladder TOML file")
+    try:
+        table = ladder_table(ladder_file)
+    except (ConfigError, OSError, KeyError) as e:
+        fail(str(e))
+    wrote(ladder_figure(table, out_dir))
+    for _, r in table.iterrows():
+        value = f"R = {r['ratio']:.3f} ± {r['ratio_se']:.3f}" if r["ratio"] == r["ratio"] else (r["bounds"] or r["note"])
+        out.print(f"{r['rung']}: {value}")

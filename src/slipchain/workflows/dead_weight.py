@@ -157,8 +157,10 @@ class Rounds:
 
     def __init__(self, out: str | os.PathLike | None, *, client: Any = None, scheduler: str | None = None,
                  n_workers: int | None = None, backend: str | BackendName = BackendName.CPU,
-                 progress: bool | None = None, announce: Callable[[str], None] | None = None):
+                 progress: bool | None = None, announce: Callable[[str], None] | None = None,
+                 batch_size: int | None = None):
         self.out, self.client, self.scheduler, self.n_workers = out, client, scheduler, n_workers
+        self.batch_size = batch_size  # runs per task, advanced together (run_sweep's batch_size)
         self.announce = announce  # called with the dashboard's address when a cluster is started
         self.backend, self.progress = str(backend), progress
         self._stack = ExitStack()
@@ -204,7 +206,7 @@ class Rounds:
             self._reuse(st)
             report = run_sweep(sweep, st, client=self._client() if st.pending() else None, scheduler=self.scheduler,
                                n_workers=self.n_workers, progress=self.progress, backend=self.backend,
-                               announce=self.announce)
+                               announce=self.announce, batch_size=self.batch_size)
             if report.interrupted:
                 raise KeyboardInterrupt
             for m in sweep.members:
@@ -338,6 +340,23 @@ def evaluations_table(configs: list[Config], results: list[MuMax]) -> "pd.DataFr
     return _evaluation_rows([(c, e) for c, r in zip(configs, results) for e in r.evaluations], "bisection")
 
 
+def store_evaluations(store: str | os.PathLike) -> "pd.DataFrame":
+    """Every member of a sweep store over ``dead_weight`` as the rows of :func:`evaluations_table`
+    (source 'sweep'): the tester's classification of each run, or its failure status (a member not
+    run yet: 'error', 'not run')."""
+    from ..sweeps.store import Store
+
+    st = Store.open(store)
+    pairs = []
+    for m in st.sweep.members:
+        try:
+            attrs = st.member_attrs(m)
+        except (OSError, KeyError, ValueError):
+            attrs = None
+        pairs.append((m.config, _evaluation(m.config.dead_weight, attrs)))
+    return _evaluation_rows(pairs, "sweep")
+
+
 def _evaluation_rows(pairs: list[tuple[Config, Evaluation]], source: str) -> "pd.DataFrame":
     import pandas as pd
 
@@ -449,7 +468,8 @@ class PlanResult:
 
 def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, scheduler: str | None = None,
              n_workers: int | None = None, backend: str | BackendName = BackendName.CPU,
-             progress: bool | None = None, announce: Callable[[str], None] | None = None) -> PlanResult:
+             progress: bool | None = None, announce: Callable[[str], None] | None = None,
+             batch_size: int | None = None) -> PlanResult:
     """Run a plan: the bisections (:func:`mu_max_many`) and the ``curve`` points, every run a member
     of a round's store in OUT/rounds (:class:`Rounds`; a second call resumes), then write mu_max.csv,
     mu_max_summary.csv, evaluations.csv and plan.toml into ``out`` (each file atomically). A
@@ -457,13 +477,15 @@ def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, schedule
     the others go on; BracketError only when every realisation's bracket is refuted (nothing to
     report). KeyboardInterrupt if interrupted (the finished runs are kept); SweepError if another
     driver runs ``out``; StoreWriteError on a full disk. ``announce``: called with the Dask
-    dashboard's address when the cluster starts."""
+    dashboard's address when the cluster starts. ``batch_size``: runs per task, advanced together
+    (one FFT per step for a batch of slab rows: far cheaper per run on small interfaces; results
+    are those of single runs, as in any sweep)."""
     import pandas as pd
 
     out = Path(out)
     configs = plan.configs()
     with Rounds(out, client=client, scheduler=scheduler, n_workers=n_workers, backend=backend,
-                progress=progress, announce=announce) as rounds:
+                progress=progress, announce=announce, batch_size=batch_size) as rounds:
         results = _bisect(configs, plan.lo, plan.hi, plan.tol, rounds.evaluate, strict=False)
         curve_jobs = [(plan.base.with_updates(theta=float(t), seed=0), float(m)) for t in plan.theta for m in plan.curve]
         curve = rounds.evaluate(curve_jobs) if curve_jobs else []

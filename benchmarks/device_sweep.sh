@@ -1,0 +1,17 @@
+#!/bin/bash
+# A sweep on the lent device machine's CPUs (issue 29: 16 cores beside this project's 2). Run there by
+# the device tool from the repository root, with the wheels the image lacks carried in .whl
+# (docs/guide/gpu.md). Usage: benchmarks/device_sweep.sh SWEEP SECONDS [WORKERS]
+# The sweep stops (SIGINT, as Ctrl-C: finished members are kept) after SECONDS; the store comes back
+# as one tarball in $OUT (the device returns at most 8 files).
+set -u
+sweep=$1; limit=$2; workers=${3:-$(nproc)}
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 3
+export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1 NUMBA_CACHE_DIR=/tmp/numba-cache
+out=${OUT:-/tmp/out}; mkdir -p "$out"
+{ nproc; lscpu | grep -E "Model name|Thread|Socket|^CPU\(s\)"; python3 -c "import numpy, numba, scipy, xarray, dask, pydantic; print('numpy', numpy.__version__, 'numba', numba.__version__, 'scipy', scipy.__version__)"; } | tee "$out/machine.txt"
+date +%s > "$out/t0"
+timeout -s INT -k 30 "$limit" python3 -m slipchain sweep "$sweep" --store /tmp/store --workers "$workers" --no-progress 2>&1 | tee "$out/sweep.log"
+date +%s > "$out/t1"
+tar czf "$out/store.tgz" -C /tmp store
+ls -la "$out"

@@ -1,0 +1,114 @@
+"""The ladder of issue 29 (slipchain.workflows.ladder): load effects read from result tables, with
+their errors and, for undecided loads, the range the runs allow; the committed ladder draws."""
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from slipchain.model.config import ConfigError
+from slipchain.workflows.ladder import effect_of_evaluations, effect_of_mu_max, effect_of_table, ladder_table, load_ladder
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_a_table_gives_the_ratio_of_its_extreme_loads_with_the_propagated_error(tmp_path):
+    # a figure's table (mu, err), rows chosen by `where`
+    t = pd.DataFrame({"v_d": [1e-3] * 3 + [3e-4] * 3, "theta": [0.05, 0.5, 1.0] * 2,
+                      "mu": [0.9, 0.8, 0.72, 0.95, 0.95, 0.96], "err": [0.009, 0.01, 0.0072, 0.01, 0.01, 0.01]})
+    t.to_csv(tmp_path / "t.csv", index=False)
+    e = effect_of_table(tmp_path / "t.csv", {"v_d": 1e-3})
+    assert (e.theta_min, e.theta_max, e.low, e.high) == (0.05, 1.0, 0.9, 0.72)
+    assert e.ratio == pytest.approx(0.8)
+    assert e.ratio_se == pytest.approx(0.8 * math.hypot(0.01, 0.01))
+    # a sweep's index (one mu_star per member): seed means, SE = std/sqrt(n); failed members left out
+    rng = np.random.default_rng(1)
+    mu = {0.05: rng.normal(0.9, 0.01, 5), 1.0: rng.normal(0.7, 0.02, 4)}
+    rows = [{"theta": th, "status": "completed", "mu_star": m} for th, ms in mu.items() for m in ms]
+    rows.append({"theta": 1.0, "status": "diverged", "mu_star": 5.0})
+    pd.DataFrame(rows).to_csv(tmp_path / "i.csv", index=False)
+    e = effect_of_table(tmp_path / "i.csv", {})
+    lo, hi = mu[0.05], mu[1.0]
+    se = [np.std(x, ddof=1) / np.sqrt(len(x)) for x in (lo, hi)]
+    assert e.ratio == pytest.approx(hi.mean() / lo.mean())
+    assert e.ratio_se == pytest.approx(e.ratio * math.hypot(se[0] / lo.mean(), se[1] / hi.mean()))
+    with pytest.raises(ConfigError, match="'where'"):
+        effect_of_table(tmp_path / "t.csv", {"v_d": 5.0})
+    with pytest.raises(ConfigError, match="columns of the table"):
+        effect_of_table(tmp_path / "t.csv", {"eta_c": 1e5})
+
+
+def _mu_max_output(path: Path) -> None:
+    """A mu-max output with theta = 1 decided (two seeds) and theta = 0.1 not: seed 0 steady at 0.5 and
+    runaway at 0.8, seed 1 runaway already at 0.5 (a refuted bracket)."""
+    path.mkdir()
+    pd.DataFrame([
+        {"theta": 0.1, "seed": 0, "status": "no-steady", "mu_max": np.nan, "lo": 0.5, "hi": 0.8, "v_max_m_s": 1e-6, "runs": 4},
+        {"theta": 0.1, "seed": 1, "status": "bracket", "mu_max": np.nan, "lo": 0.5, "hi": 1.1, "v_max_m_s": np.nan, "runs": 2},
+        {"theta": 1.0, "seed": 0, "status": "ok", "mu_max": 0.94, "lo": 0.93, "hi": 0.95, "v_max_m_s": 1e-4, "runs": 7},
+        {"theta": 1.0, "seed": 1, "status": "ok", "mu_max": 0.92, "lo": 0.91, "hi": 0.93, "v_max_m_s": 1e-4, "runs": 7},
+    ]).to_csv(path / "mu_max.csv", index=False)
+    pd.DataFrame([
+        {"theta": 0.1, "seed": 0, "mu_a": 0.5, "velocity_status": "ok"},
+        {"theta": 0.1, "seed": 0, "mu_a": 1.1, "velocity_status": "runaway"},
+        {"theta": 0.1, "seed": 0, "mu_a": 0.8, "velocity_status": "runaway"},
+        {"theta": 0.1, "seed": 0, "mu_a": 0.65, "velocity_status": "no-steady"},
+        {"theta": 0.1, "seed": 1, "mu_a": 0.5, "velocity_status": "runaway"},
+        {"theta": 0.1, "seed": 1, "mu_a": 1.1, "velocity_status": "runaway"},
+        {"theta": 1.0, "seed": 0, "mu_a": 0.93, "velocity_status": "ok"},
+        {"theta": 1.0, "seed": 1, "mu_a": 0.91, "velocity_status": "ok"},
+    ]).to_csv(path / "evaluations.csv", index=False)
+
+
+def test_an_undecided_load_gives_the_bounds_and_the_range_of_the_ratio(tmp_path):
+    _mu_max_output(tmp_path / "mm")
+    e = effect_of_mu_max(tmp_path / "mm")
+    assert math.isnan(e.low) and math.isnan(e.ratio)
+    assert e.high == pytest.approx(0.93)
+    # the summary's SE: the seed scatter, at least the bisection's half-width / sqrt(3 n)
+    assert e.high_se == pytest.approx(max(np.std([0.94, 0.92], ddof=1) / np.sqrt(2), 0.01 / np.sqrt(6)))
+    assert "theta = 0.1: 2 seed(s) undecided" in e.bounds and "runaway from mu_a = 0.5" in e.bounds
+    assert "no-steady at mu_a = 0.65" in e.bounds
+    # seed by seed: seed 0's mu_max in [0.5, 0.8], seed 1's in [0, 0.5]: their envelope [0, 0.8];
+    # so R = 0.93 / mu_max(0.1) is at least 0.93/0.8 and unbounded above
+    assert e.ratio_min == pytest.approx(0.93 / 0.8) and math.isnan(e.ratio_max)
+    # a grid of runs: bounds at every load, no ratio
+    ev = effect_of_evaluations(tmp_path / "mm" / "evaluations.csv")
+    assert math.isnan(e.ratio) and ev.bounds.startswith("theta = 0.1: steady up to mu_a = 0.5, runaway from mu_a = 0.5")
+    assert ev.bounds.endswith("theta = 1: steady up to mu_a = 0.93")
+
+
+def test_a_bad_ladder_file_names_the_rung_key_and_value(tmp_path):
+    bad = tmp_path / "l.toml"
+    bad.write_text('[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "guess"\nsource = "x"\n')
+    with pytest.raises(ConfigError, match=r"rung 1: config key 'kind' has value 'guess'; expected 'mu-max' or"):
+        load_ladder(bad)
+    bad.write_text('[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "table"\n')
+    with pytest.raises(ConfigError, match="'source' has value None"):
+        load_ladder(bad)
+    bad.write_text("")
+    with pytest.raises(ConfigError, match="at least one"):
+        load_ladder(bad)
+    r = subprocess.run([sys.executable, "-m", "slipchain", "figure", "ladder", "--ladder", str(tmp_path / "none.toml"),
+                        "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    assert r.returncode == 2 and "no such file" in r.stderr and not (tmp_path / "o").exists()
+
+
+def test_the_committed_ladder_reads_every_rung_and_draws(tmp_path):
+    """docs/ladder/ladder.toml: every source it names is committed and read; the figure is written."""
+    table = ladder_table(ROOT / "docs" / "ladder" / "ladder.toml")
+    assert len(table) == len(load_ladder(ROOT / "docs" / "ladder" / "ladder.toml"))
+    first = table.iloc[0]  # the paper's model: mu_star at v_d1 falls by about 20 % (Fig. 6)
+    assert first["ratio"] == pytest.approx(0.79, abs=0.02) and first["ratio_se"] < 0.01
+    measured = table[table["observable"] != ""]
+    assert all(np.isfinite(r["ratio"]) or r["bounds"] or r["note"] for _, r in measured.iterrows())
+    r = subprocess.run([sys.executable, "-m", "slipchain", "figure", "ladder", "--ladder",
+                        str(ROOT / "docs" / "ladder" / "ladder.toml"), "--out", str(tmp_path)], capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "ladder.png").stat().st_size > 10_000 and (tmp_path / "ladder.csv").exists()
+    assert pd.read_csv(tmp_path / "ladder.csv")["ratio"].iloc[0] == pytest.approx(first["ratio"])
