@@ -71,6 +71,7 @@ class Effect:
     bounds: str = ""  # what undecided loads' runs say instead of a value
     ratio_min: float = math.nan  # where a load is undecided: the range of R its runs allow (nan: unbounded)
     ratio_max: float = math.nan
+    per_load: str = ""  # the observable at every load ("theta: value ± se", or the bounds)
 
 
 def load_ladder(path: str | os.PathLike) -> list[Rung]:
@@ -124,6 +125,10 @@ def effect_of_mu_max(out: Path) -> Effect:
             seeds = len(table[np.isclose(table["theta"], theta)])
             notes.append(f"theta = {theta:g}: {seeds} seed(s) undecided, {_bounds(pd.read_csv(out / 'evaluations.csv'), theta)}")
     e.bounds = "; ".join(notes)
+    evs = pd.read_csv(out / "evaluations.csv")
+    e.per_load = "; ".join(f"{t:g}: {summary.loc[t, 'mu_max']:.3f} ± {summary.loc[t, 'mu_max_se']:.3f} "
+                           f"({int(summary.loc[t, 'seeds'])} of {len(table[np.isclose(table['theta'], t)])} seeds)"
+                           if t in summary.index else f"{t:g}: {_bounds(evs, t)}" for t in thetas)
     _ratio(e)
     if notes:
         ev = pd.read_csv(out / "evaluations.csv")
@@ -171,8 +176,9 @@ def effect_of_evaluations(path: Path) -> Effect:
 
     ev = pd.read_csv(path)
     thetas = sorted(ev["theta"].unique())
-    return Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]),
-                  bounds="; ".join(f"theta = {t:g}: {_bounds(ev, t)}" for t in thetas))
+    bounds = "; ".join(f"theta = {t:g}: {_bounds(ev, t)}" for t in thetas)
+    return Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]), bounds=bounds,
+                  per_load="; ".join(f"{t:g}: {_bounds(ev, t)}" for t in thetas))
 
 
 def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
@@ -194,8 +200,9 @@ def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
         g = d.groupby("theta")["mu_star"].agg(["mean", "std", "count"])
         g = pd.DataFrame({"mu": g["mean"], "err": g["std"] / np.sqrt(g["count"])})
     lo, hi = g.index.min(), g.index.max()
-    return _ratio(Effect(float(lo), float(hi), float(g.loc[lo, "mu"]), float(g.loc[lo, "err"]),
-                         float(g.loc[hi, "mu"]), float(g.loc[hi, "err"])))
+    e = Effect(float(lo), float(hi), float(g.loc[lo, "mu"]), float(g.loc[lo, "err"]), float(g.loc[hi, "mu"]),
+               float(g.loc[hi, "err"]), per_load="; ".join(f"{t:g}: {r.mu:.3f} ± {r.err:.3f}" for t, r in g.iterrows()))
+    return _ratio(e)
 
 
 def ladder_table(path: str | os.PathLike) -> "pd.DataFrame":
@@ -217,7 +224,7 @@ def ladder_table(path: str | os.PathLike) -> "pd.DataFrame":
         rows.append({"rung": r.name, "adds": r.adds, "observable": r.observable, "theta_min": e.theta_min,
                      "theta_max": e.theta_max, "low": e.low, "low_se": e.low_se, "high": e.high, "high_se": e.high_se,
                      "ratio": e.ratio, "ratio_se": e.ratio_se, "ratio_min": e.ratio_min, "ratio_max": e.ratio_max,
-                     "bounds": e.bounds, "source": r.source, "note": r.note})
+                     "bounds": e.bounds, "per_load": e.per_load, "source": r.source, "note": r.note})
     return pd.DataFrame(rows)
 
 
