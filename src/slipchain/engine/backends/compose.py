@@ -67,6 +67,17 @@ N_CT = 6
 MAX_BACKOFF = 1024
 # an implicit step (a Newton solve, ~10 explicit steps' cost) pays only this many doublings above the explicit top
 MIN_GAIN = 3
+# The Krylov driver's cost rule (slab, half-space, chain2d): a backward-Euler try there costs a number of
+# operator applications that varies by orders of magnitude (each conjugate-gradient iteration one FFT pair),
+# so whether it pays is counted, not guessed from its level: in units of one explicit step (one FFT pair
+# and the Python around it), a try costs KRYLOV_TRY_UNITS plus one per Newton and per conjugate-gradient
+# iteration (calibrated on a 16 x 16 slab, this project's 2-core machine: a try 2.4 ms, an explicit step
+# 54 us, a conjugate-gradient iteration about as much). An accepted implicit step whose tries since the last
+# one cost more units than its base steps, and that the controller does not step up from, hands back to the
+# explicit steps, which then wait 1, 2, 4, ... MAX_BACKOFF explicit steps (doubling within a sample) before
+# the next try. Counted,
+# not timed: the choice, hence the result, is the same on every machine and after a resume.
+KRYLOV_TRY_UNITS = 6.0
 # control columns (Batch.step_control): tolerance (m/s), the adaptive step's top level, steps accepted, rejected,
 # the implicit stepper's top level (:mod:`.implicit`), the last accepted step's error estimate
 CTRL_TOP_IMPLICIT, CTRL_ERR = 4, 5
@@ -547,6 +558,8 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
         for s in range(n_samples):
             start_sample(row, batch.n_contacts, batch.ysolve, batch.params, ctl)
             _restore_carry(carry[row], cr)
+            spent = 0.0  # the tries' cost since the last accepted implicit step (KRYLOV_TRY_UNITS), per sample
+            waits = 0  # the cost rule's back-off within this sample (not reset by the climb's accepted steps)
             while cr[CT_J] < sample_steps:
                 what, lv, w = implicit_plan(cr, ctrl, cr[CT_J], sample_steps)
                 if what != PLAN_IMPLICIT:
@@ -561,8 +574,9 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                     continue
                 h = dt0 * w
                 t1 = (batch.step[row] + w) * dt0
-                its, _ = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra, rk,
-                                                ap, cr[CT_HAVE] > 0)
+                its, n_cg = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra,
+                                                   rk, ap, cr[CT_HAVE] > 0)
+                spent += KRYLOV_TRY_UNITS + abs(its) + n_cg
                 err = _error(n, ur, Ur, un, Un, ap, h) if its > 0 and cr[CT_HAVE] > 0 else 0.0
                 bal = scale = fsum = w_drive = w_damp = w_contact = w_visc = 0.0
                 if its > 0 and err <= ctrl[0]:
@@ -570,6 +584,12 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                                                                                           st, vs)
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
                     continue
+                # not climbing, and dearer than the explicit steps it replaced: hand back
+                if w == (1 << lv) and cr[CT_LEVEL] <= lv and spent > w and cr[CT_LEVEL] > ctrl[1]:
+                    waits = min(max(1, 2 * waits), MAX_BACKOFF)
+                    cr[CT_LEVEL] = int(ctrl[1])
+                    cr[CT_BACKOFF] = cr[CT_WAIT] = waits
+                spent = 0.0
                 implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, ra, rk, uk, fk, ca, slow, w)
                 commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
                 acc[row, A_WCONTACT] -= w_contact

@@ -582,6 +582,15 @@ class Arms:
         self.G = (np.dot(self.r * a, self.br[:J]), np.dot(self.r * a, self.br[J:2 * J]))
         return self.S
 
+    def mean(self, h):
+        """((Gbar of both layers), Sbar): the mean of g over a step h is Gbar + Sbar w', for w' constant
+        over the step (xi_j(t) = a_j(t) xi_j + tau_j (1 - a_j(t)) w'): Gbar = sum_j r_j (c_j/h) xi_j,
+        Sbar = sum_j r_j tau_j (1 - c_j/h), c_j = tau_j (1 - exp(-h/tau_j))."""
+        c = -self.tau * np.expm1(-h / self.tau)
+        wa = self.r * c / h
+        J = self.J
+        return (np.dot(wa, self.br[:J]), np.dot(wa, self.br[J:2 * J])), float(np.dot(self.r, self.tau * (1.0 - c / h)))
+
     def now(self):
         """g = sum_j r_j xi_j of both layers at the step's start."""
         J = self.J
@@ -710,15 +719,18 @@ class SlabSystem:
         return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un, w_visc)
 
     def _arm_work(self, w0, w1, lw1, h):
-        """The arms' work on the blocks over the step by the trapezoidal rule, -K_b g . w at both ends (w
-        the velocity the arms act on: relative to the plate under the dead weight), g' = G + S w' (0
-        without arms); ``lw1`` = L w'."""
+        """The arms' work on the blocks over the step, -h K_b gbar . w' (w' the step's velocity the arms
+        act on: relative to the plate under the dead weight; ``lw1`` = L w'; 0 without arms), with gbar the
+        mean of g over the step, exact for the velocity constant over the step that the arms' update
+        assumes (:meth:`Arms.mean`). Not the trapezoidal rule: its start value -K_b g . w holds the last
+        step's velocity, and after explicit steps the fast arms' dashpot part, -c w**2, at that velocity
+        is a residual that backward Euler's own damping of the ringing never pays back, so every try
+        after explicit steps failed the energy check (issue 29, docs/tester-3d). With gbar the residual
+        is backward Euler's numerical dissipation alone, as with elastic springs. (``w0`` unused.)"""
         if self.arms is None:
             return 0.0
-        g0 = self.arms.now()[0]
-        lg0 = self.arm_part(self.op.apply(g0), g0)
-        lg1 = self.lG + self.S * self.arm_part(lw1, w1)
-        return -0.5 * (float(np.dot(lg0, w0)) + float(np.dot(lg1, w1))) * h
+        (gb, _), sb = self.arms.mean(h)
+        return -float(np.dot(self.arm_part(self.op.apply(gb), gb) + sb * self.arm_part(lw1, w1), w1)) * h
 
 
 def lattice_terms(ly, K, KL, KT, Kd, KY, KLY, meta, a, b, fa, fb, da, db):
@@ -825,7 +837,7 @@ class LatticeSystem:
 
     def balance(self, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs):
         """The step's works by the trapezoidal rule and its energy residual, as :func:`step_balance`
-        (with the arms, their work K_b g . v by the same rule, as :meth:`SlabSystem.balance`)."""
+        (with the arms, their work over the step at its velocity, as :meth:`SlabSystem._arm_work`)."""
         p, n = self.p, self.n
         t0 = t1 - h
         x1, X1 = xr + h * un, Xr + h * Un
@@ -836,12 +848,10 @@ class LatticeSystem:
         _, _, d1x, d1X = self.terms(un, Un)
         w_damp = 0.5 * (w0 + float(np.dot(d1x, un) + np.dot(d1X, Un))) * h
         w_visc = 0.0
-        if self.arms is not None:  # g' = G + S v'
-            Ga, Gb = self.arms.G
-            fa, fb = self.bulk(*self.arms.now())
-            w_visc = float(np.dot(fa, ur) + np.dot(fb, Ur))
-            fa, fb = self.bulk(Ga + self.S * un, Gb + self.S * Un)
-            w_visc = 0.5 * (w_visc + float(np.dot(fa, un) + np.dot(fb, Un))) * h
+        if self.arms is not None:  # -h K_b gbar . v', gbar the mean of g over the step (SlabSystem._arm_work)
+            (ga, gb), sb = self.arms.mean(h)
+            fa, fb = self.bulk(ga + sb * un, gb + sb * Un)
+            w_visc = float(np.dot(fa, un) + np.dot(fb, Un)) * h
         return _balance(p, de, fsum, fsum * p[P_VD] * h, w_damp, h, nc, st, vs, ur, un, w_visc)
 
 
