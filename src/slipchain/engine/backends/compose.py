@@ -73,7 +73,8 @@ MIN_GAIN = 3
 # and the Python around it), a try costs KRYLOV_TRY_UNITS plus one per Newton and per conjugate-gradient
 # iteration (calibrated on a 16 x 16 slab, this project's 2-core machine: a try 2.4 ms, an explicit step
 # 54 us, a conjugate-gradient iteration about as much). An accepted implicit step whose tries since the last
-# one cost more units than its base steps, and that the controller does not step up from, hands back to the
+# one cost more units than the explicit steps at the explicit top that would cover its base steps (one per
+# 2**top base steps), and that the controller does not step up from, hands back to the
 # explicit steps, which then wait 1, 2, 4, ... MAX_BACKOFF explicit steps (doubling within a sample) before
 # the next try. Counted,
 # not timed: the choice, hence the result, is the same on every machine and after a resume.
@@ -585,7 +586,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
                     continue
                 # not climbing, and dearer than the explicit steps it replaced: hand back
-                if w == (1 << lv) and cr[CT_LEVEL] <= lv and spent > w and cr[CT_LEVEL] > ctrl[1]:
+                if w == (1 << lv) and cr[CT_LEVEL] <= lv and spent * (1 << int(ctrl[1])) > w and cr[CT_LEVEL] > ctrl[1]:
                     waits = min(max(1, 2 * waits), MAX_BACKOFF)
                     cr[CT_LEVEL] = int(ctrl[1])
                     cr[CT_BACKOFF] = cr[CT_WAIT] = waits
