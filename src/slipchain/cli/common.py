@@ -72,6 +72,7 @@ def status_exit(status: Status) -> int:
     return interrupts.exit_code() if status == Status.INTERRUPTED else EXIT_CODES.get(status, 1)
 
 
+BatchSizeOpt = Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Runs per task, advanced together (default 1; 256 on the GPU): one kernel launch, or for slab runs one FFT per step.")]
 WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="Local cluster size (default: one process per core).")]
 SchedulerOpt = Annotated[Optional[str], typer.Option("--scheduler", help="Address of an existing Dask scheduler, e.g. tcp://host:8786.")]
 BackendOpt = Annotated[BackendName, typer.Option("--backend", help="Where to compute: cpu, gpu (numba.cuda) or auto (the GPU if one is found).")]

@@ -10,7 +10,7 @@ from rich.table import Table
 
 from ..engine import interrupts
 from ..model.config import ConfigError
-from .common import (BackendName, BackendOpt, DashboardOpt, ProgressOpt, SchedulerOpt, WorkersOpt, announce_dashboard,
+from .common import (BackendName, BackendOpt, BatchSizeOpt, DashboardOpt, ProgressOpt, SchedulerOpt, WorkersOpt, announce_dashboard,
                      fail, out, study_path, wrote)
 
 
@@ -28,7 +28,7 @@ def mu_max(
     progress: ProgressOpt = None,
     dashboard: DashboardOpt = False,
     backend: BackendOpt = BackendName.CPU,
-    batch_size: Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Runs per task, advanced together (default 1; 256 on the GPU): one FFT per step for a batch of slab runs.")] = None,
+    batch_size: BatchSizeOpt = None,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the plan, say what it would bisect, and stop: "
                                           "nothing is run or written.")] = False,
 ) -> None:

@@ -15,7 +15,7 @@ from ..results.schema import Status
 from ..sweeps.catalogue import CATALOGUE, preset_files
 from ..sweeps.definition import PRESETS, Preset, SweepError, load_sweep_definition
 from ..sweeps.executor import SWEEP_CHECKPOINT_EVERY, StoreWriteError, SweepReport, run_sweep
-from .common import (BackendOpt, DashboardOpt, ProgressOpt, SchedulerOpt, WorkersOpt, announce_dashboard, fail, out,
+from .common import (BackendOpt, BatchSizeOpt, DashboardOpt, ProgressOpt, SchedulerOpt, WorkersOpt, announce_dashboard, fail, out,
                      study_path, sweep_exit)
 
 
@@ -28,7 +28,7 @@ def sweep(
     progress: ProgressOpt = None,
     dashboard: DashboardOpt = False,
     backend: BackendOpt = BackendName.CPU,
-    batch_size: Annotated[Optional[int], typer.Option("--batch-size", min=1, help="Members per task, advanced together (default 1; 256 on the GPU).")] = None,
+    batch_size: BatchSizeOpt = None,
     checkpoint_every: Annotated[float, typer.Option(
         "--checkpoint-every", min=0.0, help="Wall-clock seconds between checkpoints of a running task, in STORE/checkpoints "
         "(a killed task resumes from its checkpoint).")] = SWEEP_CHECKPOINT_EVERY,

@@ -346,15 +346,9 @@ def store_evaluations(store: str | os.PathLike) -> "pd.DataFrame":
     run yet: 'error', 'not run')."""
     from ..sweeps.store import Store
 
-    st = Store.open(store)
-    pairs = []
-    for m in st.sweep.members:
-        try:
-            attrs = st.member_attrs(m)
-        except (OSError, KeyError, ValueError):
-            attrs = None
-        pairs.append((m.config, _evaluation(m.config.dead_weight, attrs)))
-    return _evaluation_rows(pairs, "sweep")
+    st = Store.open(store)  # member_attrs: None for a member not run yet, never an exception
+    return _evaluation_rows([(m.config, _evaluation(m.config.dead_weight, st.member_attrs(m))) for m in st.sweep.members],
+                            "sweep")
 
 
 def _evaluation_rows(pairs: list[tuple[Config, Evaluation]], source: str) -> "pd.DataFrame":

@@ -113,8 +113,10 @@ def effect_of_mu_max(out: Path) -> Effect:
     from .dead_weight import mu_max_summary
 
     table = pd.read_csv(out / "mu_max.csv")
+    ev = pd.read_csv(out / "evaluations.csv")
     summary = mu_max_summary(table).set_index("theta")
     thetas = sorted(table["theta"].unique())
+    seeds = {t: int(np.isclose(table["theta"], t).sum()) for t in thetas}
     e = Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]))
     notes = []
     for theta, attr in ((thetas[0], "low"), (thetas[-1], "high")):
@@ -122,16 +124,13 @@ def effect_of_mu_max(out: Path) -> Effect:
             setattr(e, attr, float(summary.loc[theta, "mu_max"]))
             setattr(e, f"{attr}_se", float(summary.loc[theta, "mu_max_se"]))
         else:
-            seeds = len(table[np.isclose(table["theta"], theta)])
-            notes.append(f"theta = {theta:g}: {seeds} seed(s) undecided, {_bounds(pd.read_csv(out / 'evaluations.csv'), theta)}")
+            notes.append(f"theta = {theta:g}: {seeds[theta]} seed(s) undecided, {_bounds(ev, theta)}")
     e.bounds = "; ".join(notes)
-    evs = pd.read_csv(out / "evaluations.csv")
     e.per_load = "; ".join(f"{t:g}: {summary.loc[t, 'mu_max']:.3f} ± {summary.loc[t, 'mu_max_se']:.3f} "
-                           f"({int(summary.loc[t, 'seeds'])} of {len(table[np.isclose(table['theta'], t)])} seeds)"
-                           if t in summary.index else f"{t:g}: {_bounds(evs, t)}" for t in thetas)
+                           f"({int(summary.loc[t, 'seeds'])} of {seeds[t]} seeds)"
+                           if t in summary.index else f"{t:g}: {_bounds(ev, t)}" for t in thetas)
     _ratio(e)
     if notes:
-        ev = pd.read_csv(out / "evaluations.csv")
         (l0, l1), (h0, h1) = ((_interval(ev, t) if not np.isfinite(v) else (v, v))
                               for t, v in ((thetas[0], e.low), (thetas[-1], e.high)))
         e.ratio_min = h0 / l1 if l1 > 0 else math.nan

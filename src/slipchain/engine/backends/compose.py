@@ -74,10 +74,9 @@ MIN_GAIN = 3
 # iteration (calibrated on a 16 x 16 slab, this project's 2-core machine: a try 2.4 ms, an explicit step
 # 54 us, a conjugate-gradient iteration about as much). An accepted implicit step whose tries since the last
 # one cost more units than the explicit steps at the explicit top that would cover its base steps (one per
-# 2**top base steps), and that the controller does not step up from, hands back to the
-# explicit steps, which then wait 1, 2, 4, ... MAX_BACKOFF explicit steps (doubling within a sample) before
-# the next try. Counted,
-# not timed: the choice, hence the result, is the same on every machine and after a resume.
+# 2**top base steps), and that the controller does not step up from, hands back to the explicit steps,
+# which then wait 1, 2, 4, ... MAX_BACKOFF explicit steps (doubling within a sample) before the next try.
+# Counted, not timed: the choice, hence the result, is the same on every machine and after a resume.
 KRYLOV_TRY_UNITS = 6.0
 # control columns (Batch.step_control): tolerance (m/s), the adaptive step's top level, steps accepted, rejected,
 # the implicit stepper's top level (:mod:`.implicit`), the last accepted step's error estimate
@@ -583,10 +582,11 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 if its > 0 and err <= ctrl[0]:
                     bal, scale, fsum, w_drive, w_damp, w_contact, w_visc = system.balance(xr, ur, Xr, Ur, un, Un, h, t1, nc,
                                                                                           st, vs)
-                if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, w < (1 << lv)):
+                cut = w < (1 << lv)
+                if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
                     continue
-                # not climbing, and dearer than the explicit steps it replaced: hand back
-                if w == (1 << lv) and cr[CT_LEVEL] <= lv and spent * (1 << int(ctrl[1])) > w and cr[CT_LEVEL] > ctrl[1]:
+                # a full step, not climbing, and dearer than the explicit steps it replaced: hand back
+                if not cut and cr[CT_LEVEL] <= lv and spent * (1 << int(ctrl[1])) > w and cr[CT_LEVEL] > ctrl[1]:
                     waits = min(max(1, 2 * waits), MAX_BACKOFF)
                     cr[CT_LEVEL] = int(ctrl[1])
                     cr[CT_BACKOFF] = cr[CT_WAIT] = waits

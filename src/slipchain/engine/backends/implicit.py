@@ -639,7 +639,7 @@ class SlabSystem:
         self.S = self.arms.setup(h) if self.arms is not None else 0.0
         self.hs = h + self.S  # h**2 L -> h (h + S) L (:class:`Arms`)
         self.cdiag = m + h * meta
-        if self.arms is not None:  # the arms' force -K_b G (kept for the balance)
+        if self.arms is not None:  # the arms' force -K_b G (the right-hand side of either drive)
             G = self.arms.G[0]
             self.lG = self.arm_part(op.apply(G), G)
         if self.dead:
@@ -709,16 +709,16 @@ class SlabSystem:
             e0 += 0.5 * n * p[P_ML] * Up * Up + op.energy(xr - Xp, lx, 0.0) - fb * Xp
             e1 += 0.5 * n * p[P_ML] * Un1 * Un1 + op.energy(x1 - X1, lx1, 0.0) - fb * X1
             w_damp = -0.5 * meta * (float(np.sum((ur - Up) ** 2)) + float(np.sum((un - Un1) ** 2))) * h
-            w_visc = self._arm_work(ur - Up, un - Un1, lun - k0 * Un1, h)
+            w_visc = self._arm_work(un - Un1, lun - k0 * Un1, h)
             return _balance(p, e1 - e0, 0.0, 0.0, w_damp, h, nc, st, vs, ur, un, w_visc)
         e0 += op.energy(xr, lx, vd * t0)
         e1 += op.energy(x1, lx1, vd * t1)
         fsum = 0.5 * k0 * (n * vd * (t0 + t1) - float(np.sum(xr)) - float(np.sum(x1)))
         w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
-        w_visc = self._arm_work(ur, un, lun, h)
+        w_visc = self._arm_work(un, lun, h)
         return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un, w_visc)
 
-    def _arm_work(self, w0, w1, lw1, h):
+    def _arm_work(self, w1, lw1, h):
         """The arms' work on the blocks over the step, -h K_b gbar . w' (w' the step's velocity the arms
         act on: relative to the plate under the dead weight; ``lw1`` = L w'; 0 without arms), with gbar the
         mean of g over the step, exact for the velocity constant over the step that the arms' update
@@ -726,7 +726,7 @@ class SlabSystem:
         step's velocity, and after explicit steps the fast arms' dashpot part, -c w**2, at that velocity
         is a residual that backward Euler's own damping of the ringing never pays back, so every try
         after explicit steps failed the energy check (issue 29, docs/tester-3d). With gbar the residual
-        is backward Euler's numerical dissipation alone, as with elastic springs. (``w0`` unused.)"""
+        is backward Euler's numerical dissipation alone, as with elastic springs."""
         if self.arms is None:
             return 0.0
         (gb, _), sb = self.arms.mean(h)
