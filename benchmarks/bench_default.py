@@ -8,7 +8,11 @@
    steady start, 20 ms from dt = 1e-7 s): steps taken per base step and the share of steps
    rejected, old (largest step 8e-7 s, above the stable step 6.87e-7 s) and new (4e-7 s).
 
-    .venv/bin/python benchmarks/bench_default.py --old /tmp/old [--repeat 5]
+    .venv/bin/python benchmarks/bench_default.py --old /tmp/old [--repeat 5] [--extra NAME=PATH ...]
+
+``--extra NAME=PATH``: more checkouts timed in the same alternation (the kernel only), each reported
+against ``--old``; e.g. the old kernel with a later fix applied, to tell the fix's cost from the
+refactor's.
 """
 
 from __future__ import annotations
@@ -68,18 +72,25 @@ def main() -> None:
     ap.add_argument("--old", type=Path, required=True, help="a checkout of the commit before issue 26")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--extra", action="append", default=[], metavar="NAME=PATH",
+                    help="another checkout to time beside the two (the kernel only)")
     args = ap.parse_args()
     here = Path(__file__).resolve().parents[1]
-    caches = {name: tempfile.mkdtemp(prefix=f"numba-{name}-") for name in ("old", "new")}
-    ns: dict[str, list[float]] = {"old": [], "new": []}
+    trees = {"old": args.old, "new": here, **{e.split("=", 1)[0]: Path(e.split("=", 1)[1]) for e in args.extra}}
+    caches = {name: tempfile.mkdtemp(prefix=f"numba-{name}-") for name in trees}
+    ns: dict[str, list[float]] = {name: [] for name in trees}
     for _ in range(args.rounds):
-        for name, src in (("old", args.old), ("new", here)):
+        for name, src in trees.items():
             ns[name] += child(src, "kernel", args.repeat, caches[name])["ns"]
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores; {args.rounds} rounds x "
           f"{args.repeat} timings, alternated")
     old, new = statistics.median(ns["old"]), statistics.median(ns["new"])
     print("| chain, fixed step, N = 301, theta = 0.5 | before | after | after/before |\n|---|---|---|---|")
     print(f"| ns per block-step (median) | {old:.3f} | {new:.3f} | {new / old:.3f} |")
+    for name in trees:
+        if name not in ("old", "new"):
+            ex = statistics.median(ns[name])
+            print(f"| {name}: ns per block-step (median) | {old:.3f} | {ex:.3f} | {ex / old:.3f} |")
     print("\n| adaptive step, reference point, 20 ms from dt = 1e-7 | largest step | steps per base step | "
           "rejected / taken |\n|---|---|---|---|")
     for name, src in (("before", args.old), ("after", here)):

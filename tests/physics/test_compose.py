@@ -34,11 +34,18 @@ def _ground_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     return 0.0, 0.0
 
 
-def _run(adaptive: bool, dt: float, n_samples: int, sample_steps: int, tol: float = 0.0, levels: int = 0):
+def _run(adaptive: bool, dt: float, n_samples: int, sample_steps: int, tol: float = 0.0, levels: int = 0,
+         stepwise: bool = False):
+    """``stepwise``: the fixed stepper's samples by :func:`compose.step_sample` (one step per call, as
+    the adaptive stepper's are) instead of :func:`compose.fixed_sample` (the step written out)."""
     n = OMEGA.size
-    step = compose.adaptive_stepper(_ground_explicit, _ground_commit) if adaptive else compose.fixed_stepper(
-        _ground_explicit, _ground_commit, False)
-    advance = compose.kernel_driver(step)
+    if adaptive:
+        sample = compose.step_sample(compose.adaptive_stepper(_ground_explicit, _ground_commit))
+    elif stepwise:
+        sample = compose.step_sample(compose.fixed_stepper(_ground_explicit, _ground_commit, False))
+    else:
+        sample = compose.fixed_sample(_ground_explicit, _ground_commit, False)
+    advance = compose.kernel_driver(sample)
     x = np.ones((1, n))
     u = np.zeros((1, n))
     X = (OMEGA**2)[None, :].copy()
@@ -66,6 +73,10 @@ def test_a_body_from_outside_composes_with_the_fixed_stepper_exactly():
     exact = np.cos(k * th) - (dt * OMEGA) ** 2 / 2.0 * np.sin(k * th) / np.sin(th)
     np.testing.assert_allclose(got, exact.mean(axis=1), rtol=0, atol=1e-11)
     assert taken == 20 * steps
+    # the fixed stepper's sample written out (the chains' kernel) is its step repeated, bit for bit
+    stepwise, _, taken_stepwise = _run(False, dt, 20, steps, stepwise=True)
+    assert taken_stepwise == taken
+    np.testing.assert_array_equal(stepwise, got)
 
 
 def test_the_same_body_composes_with_the_adaptive_stepper():

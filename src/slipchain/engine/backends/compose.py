@@ -103,6 +103,64 @@ def fixed_stepper(explicit, commit, fastmath: bool):
     return step
 
 
+def fixed_sample(explicit, commit, fastmath: bool):
+    """One output sample of one row by the fixed step: :func:`fixed_stepper`'s step in a counted
+    loop, the step written out (not called), so that the row's arrays are bound once per sample and
+    not once per step (numba counts a reference for each array argument of an inlined call).
+    ``wc, wd, wdr, wv``: the row's running contact, damping, drive and bulk works, returned with the
+    sample's added step by step (the same sums, bit for bit, as a loop over steps in the driver).
+    Returns (base steps, sum of f_d contributions, the four works)."""
+    flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
+
+    @nb.njit(cache=True, **flags)
+    def sample(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, nstep, sample_steps, rc,
+               scratch, wc, wd, wdr, wv):
+        un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave = scratch
+        K, KL, KT, Kd, m, meta, vd, fconst, dt, dtm, dtmL, bc, c, m_eff, slow = rc
+        fold = p[P_FOLD] > 0.0
+        inv_dt = 1.0 / dt
+        n = xr.size
+        fds = 0.0
+        for i in range(sample_steps):
+            fsum = explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt, (nstep + i) * dt)
+            _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt, fold)
+            wc -= _contact_sums(nc, fk, uk, ca, slow) * dt
+            dwd, dwv = commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, dt)
+            wd += dwd
+            wv += dwv
+            wdr += fsum * vd * dt
+            fds += fsum / n
+        return sample_steps, fds, wc, wd, wdr, wv
+
+    return sample
+
+
+def step_sample(stepper):
+    """One output sample of one row by repeated steps of ``stepper`` (the adaptive and implicit
+    steppers: each step takes one or more base steps), from the sample's start. Arguments and
+    returns as :func:`fixed_sample`."""
+
+    @nb.njit(cache=True)
+    def sample(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, nstep, sample_steps, rc,
+               scratch, wc, wd, wdr, wv):
+        fds = 0.0
+        j = 0
+        for _ in range(sample_steps):  # every step takes at least one base step (a counted loop: faster)
+            if j >= sample_steps:
+                break
+            w, dfd, dwc, dwd, dwdr, dwv = stepper(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap,
+                                                  ca, j, nstep + j, sample_steps, rc, scratch)
+            wc -= dwc
+            wd += dwd
+            wdr += dwdr
+            wv += dwv
+            fds += dfd
+            j += w
+        return j, fds, wc, wd, wdr, wv
+
+    return sample
+
+
 def adaptive_stepper(explicit, commit):
     """One accepted adaptive step of one row (:mod:`.adaptive`: levels h = dt 2**k on the fixed
     step's time grid, the error from consecutive accelerations, rejection and restore), composed
@@ -338,9 +396,10 @@ def _save_carry(cy, cr):
     cy[3] = cr[CT_BACKOFF]
 
 
-def kernel_driver(stepper):
-    """The whole chunk in one compiled call, row after row (a body that needs nothing from outside
-    the kernel: the chains)."""
+def kernel_driver(sample):
+    """The whole chunk in one compiled call, row after row, one output sample of a row per call of
+    ``sample`` (:func:`fixed_sample`, :func:`step_sample`) (a body that needs nothing from outside the
+    kernel: the chains)."""
 
     @nb.njit(cache=True)
     def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
@@ -377,20 +436,10 @@ def kernel_driver(stepper):
                 start_sample(row, n_contacts, ysolve, params, ctl)
                 if keep:
                     _restore_carry(carry[row], cr)
-                fds = 0.0
-                j = 0
-                for _ in range(sample_steps):  # every step takes at least one base step (a counted loop: faster)
-                    if j >= sample_steps:
-                        break
-                    w, dfd, dwc, dwd, dwdr, dwv = stepper(p, Fr, 0.0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr,
-                                                          ap, ca, j, steps[row], sample_steps, rc, scratch)
-                    w_contact -= dwc
-                    w_damp += dwd
-                    w_drive += dwdr
-                    w_visc += dwv
-                    fds += dfd
-                    steps[row] += w
-                    j += w
+                j, fds, w_contact, w_damp, w_drive, w_visc = sample(
+                    p, Fr, 0.0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, steps[row], sample_steps, rc,
+                    scratch, w_contact, w_damp, w_drive, w_visc)
+                steps[row] += j
                 if keep:
                     _save_carry(carry[row], cr)
                 if not _end_sample(xr, Xr, fds, sample_steps, w_contact, out[row, s]):
@@ -702,7 +751,10 @@ def _row_loop(body: str):
 @functools.cache
 def _loop(body: str, adaptive: bool | str):
     step = stepper(body, adaptive)
-    return kernel_driver(step) if body.startswith("lattice") else rows_driver(step, _body(body)[2] and not adaptive)
+    if body.startswith("lattice"):
+        explicit, commit, fastmath = _body(body)
+        return kernel_driver(step_sample(step) if adaptive else fixed_sample(explicit, commit, fastmath))
+    return rows_driver(step, _body(body)[2] and not adaptive)
 
 
 __all__ = ["BODIES", "adaptive_stepper", "advance", "fft_advance", "fixed_stepper", "kernel_advance", "kernel_driver",

@@ -432,7 +432,7 @@ def chain_damping(p, un, Un, dampx, dampX):
 
 @nb.njit(cache=True)
 def damping_power(dampx, dampX, u, U):
-    """sum_i (damp_x u + damp_X U): the pair damping's power (as :func:`.cpu._move` sums it)."""
+    """sum_i (damp_x u + damp_X U): the pair damping's power (as :func:`.cpu.lattice_commit` sums it)."""
     wd = 0.0
     for i in range(u.size):
         wd += dampx[i] * u[i] + dampX[i] * U[i]
