@@ -67,6 +67,8 @@ CATALOGUE: dict[str, Study] = {
                        "the tester's protocol on a 16 x 16 interface: rubber, H = 50 a, its top, the weight at once"),
     "tester-16-low": Study("study", 4, "22 min", "docs/tester-3d/index.md",
                            "tester-16's lowest load at dt = 5e-8 s"),
+    "tester-16-11c": Study("study", 15, "about 420 s on 16 CPUs", "docs/tester-3d/index.md",
+                           "tester-16 at Fig. 3's 11 °C (theta 0.2, 0.5, 1; five weights)"),
     "fig6-fold": Study("validation", 48, "1.4 min", "docs/fold-convergence/report.md",
                        "the fold-aware step at three dt against dt = 1e-8 s"),
     "implicit-corners": Study("validation", 48, "11 min", "docs/numerics.md",
