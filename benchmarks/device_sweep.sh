@@ -3,7 +3,8 @@
 # the device tool from the repository root, with the wheels the image lacks carried in .whl
 # (docs/guide/gpu.md). Usage: benchmarks/device_sweep.sh SWEEP SECONDS [WORKERS]
 # The sweep stops (SIGINT, as Ctrl-C: finished members are kept) after SECONDS; the store comes back
-# as one tarball in $OUT (the device returns at most 8 files).
+# as a tarball in $OUT, split into parts of 15 MiB (the device returns at most 8 files of 16 MiB each:
+# a 15-member rubber store of 21.8 MB did not come back whole). Here: cat store.tgz.* | tar xz
 set -u
 sweep=$1; limit=$2; workers=${3:-$(nproc)}
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 3
@@ -13,5 +14,5 @@ out=${OUT:-/tmp/out}; mkdir -p "$out"
 date +%s > "$out/t0"
 timeout -s INT -k 30 "$limit" python3 -m slipchain sweep "$sweep" --store /tmp/store --workers "$workers" --no-progress 2>&1 | tee "$out/sweep.log"
 date +%s > "$out/t1"
-tar czf "$out/store.tgz" -C /tmp store
+tar czf - -C /tmp store | split -b 15M -d -a 1 - "$out/store.tgz."
 ls -la "$out"
