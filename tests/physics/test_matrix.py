@@ -75,10 +75,22 @@ def _trace(ds, drive):
                                                        if refusal(g, "adaptive", d, "cpu", m) is None])
 def test_adaptive_step_converges_to_the_fixed_step(geometry, drive, material):
     fixed = _trace(run(_config(geometry, "fixed", drive, material, t_total=1e-3), progress=False), drive)
+    end = fixed.size
+    if material == "prony" and drive == "spring":
+        # With the rubber the comparison ends 50 us before the first slip event (after the start's dip, the
+        # first sample 5 % below the running maximum of f_d): its onset, at the end of a slow creep along a flat
+        # maximum of f_d, moves by tens of us with any step near 1e-7 s, the fold step's too
+        # (docs/guide/viscoelastic.md), so there the steps are compared over many events, statistically
+        # (test_viscoelastic.py).
+        low = int(np.argmin(fixed[: fixed.size // 2]))
+        rise = fixed[low:]
+        drop = rise < 0.95 * np.maximum.accumulate(rise)
+        end = (low + int(np.argmax(drop)) if drop.any() else fixed.size) - 5
+        assert end >= 20  # at least 0.2 ms compared
     diff = []
     for tol in (1e-2, 1e-3):
         ds = run(_config(geometry, "adaptive", drive, material, t_total=1e-3, step_tol=tol), progress=False)
-        diff.append(float(np.abs(_trace(ds, drive) - fixed).max() / np.abs(fixed).max()))
+        diff.append(float(np.abs(_trace(ds, drive)[:end] - fixed[:end]).max() / np.abs(fixed[:end]).max()))
     assert diff[0] < 3e-2  # a relative error of the order of the tolerance (measured: up to 1.1e-2)
     assert diff[1] < diff[0]  # and smaller with a tighter tolerance
 

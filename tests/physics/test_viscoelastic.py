@@ -10,6 +10,7 @@
 Checkpoint resume and the energy balance in every accepted cell: tests/physics/test_matrix.py.
 """
 
+import math
 import numpy as np
 import pytest
 
@@ -182,8 +183,10 @@ def test_default_compound_and_temperature_shift():
     with pytest.raises(ConfigError, match="runs on the slab under the dead weight only"):
         make_config(material="prony", geometry="slab", N=8, Ly=8)  # the spring drive
     make_config(material="prony", geometry="halfspace", N=8, Ly=8)  # the half-space's k(q != 0) is the rubber's
-    with pytest.raises(ConfigError, match="runs with integrator = 'fold' or 'fixed'"):
-        make_config(material="prony", integrator="adaptive")
+    # the adaptive step runs, below fold's accuracy bound 0.1/omega0 and at its own tolerance
+    ad = make_config(material="prony", integrator="adaptive")
+    assert ad.step_tol == 1e-3 and ad.step_levels >= 1 and ad.dt * 2**ad.step_levels <= 0.1 / ad.omega0 * (1 + 1e-9)
+    assert make_config(material="prony", integrator="adaptive", step_tol=1e-2).step_tol == 1e-2
 
 
 # The slab under the dead weight (the whole kernel is the rubber's; docs/guide/viscoelastic.md)
@@ -266,3 +269,20 @@ def test_halfspace_arms_act_on_every_mode_but_the_uniform_one():
     assert np.abs(du - de).max() > 1e-2 * np.abs(de).max()  # the other modes: stiffer
     rubber = go(material="prony")
     assert rubber.attrs["W_bulk"] < 0 and rubber.attrs["check_energy_balance_passed"] == 1
+
+
+def test_adaptive_step_with_the_rubber_agrees_with_the_fold_step_over_many_events():
+    """Issue 28: over 50 ms of stick-slip (N = 31, theta = 1, epsilon = 1e-2, the default compound), the
+    adaptive step at its defaults (base 2e-8 s, two doublings, step_tol 1e-3) gives the fold step's mu_star at
+    its base step within two combined standard errors, for two seeds, and closes its energy balance as tightly
+    (measured: differences -0.0011 and -0.0005 against combined errors 0.0032 and 0.0047; residuals 7e-6 and
+    5e-6). Single event onsets are not compared: they move by tens of us with any step near 1e-7 s
+    (docs/guide/viscoelastic.md)."""
+    common = dict(N=31, theta=1.0, eta_c=1e5, v_d=1e-3, start="steady", material="prony", t_total=0.05)
+    for seed in (0, 1):
+        fold = run(make_config(**common, seed=seed, integrator="fold", dt=2e-8), progress=False).attrs
+        ad = run(make_config(**common, seed=seed, integrator="adaptive"), progress=False).attrs
+        se = math.hypot(fold["mu_star_sem"], ad["mu_star_sem"])
+        assert abs(ad["mu_star"] - fold["mu_star"]) < 2.0 * se, (ad["mu_star"], fold["mu_star"], se)
+        assert 0 < se < 0.02  # a measured friction, not a blank window
+        assert ad["check_energy_balance"] < 1e-4 and fold["check_energy_balance"] < 1e-4

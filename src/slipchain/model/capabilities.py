@@ -41,11 +41,6 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
                     "modulus; give dead_weight, or use 'halfspace', 'chain' or 'chain2d')")
         if backend != "cpu":
             return "material = 'prony' runs on the CPU only in this version"
-        if integrator == "adaptive":
-            return ("material = 'prony' runs with integrator = 'fold' or 'fixed' in this version (with the default "
-                    "compound the adaptive step starts slip events 10-15 us early at every tolerance, though it "
-                    "agrees with the fixed step to 8e-4 before them: docs/guide/viscoelastic.md; give "
-                    "integrator = 'fold')")
     if backend == "cpu":
         return None
     if integrator != "fixed":

@@ -61,8 +61,8 @@ gradients on :class:`SlabSystem`, Fourier-diagonal, or :class:`LatticeSystem`), 
 at the step's end is linear in the unknowns, h**2 K_b becoming h (h + S) K_b); their work on the
 blocks is taken by the trapezoidal rule as the other works, and the arms are updated by the
 accepted velocities (:func:`.viscoelastic.prony_be_commit`). The explicit levels are the fold step
-at dt alone (``Config.step_levels`` = 0: the adaptive levels are not trusted with the Prony bulk,
-docs/guide/viscoelastic.md).
+at dt alone (``Config.step_levels`` = 0: chosen before the adaptive levels were validated with the
+Prony bulk, and kept so that its results stay as committed; docs/guide/viscoelastic.md).
 """
 
 from __future__ import annotations
