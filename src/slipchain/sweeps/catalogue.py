@@ -53,6 +53,8 @@ CATALOGUE: dict[str, Study] = {
                     "mu_max(theta) under a dead weight by bisection, the tester's observable"),
     "mu-max-rubber": Study("plan", 42, "17 min", "docs/mu-max-rubber/index.md",
                            "mu_max(theta) under a dead weight with a viscoelastic slider"),
+    "mu-max-rubber-400ms": Study("plan", 14, "about 15 min", "docs/mu-max-rubber/index.md",
+                                 "the rubber's mu_max at theta = 0.5 loaded twice as slowly (400-ms ramp)"),
     "ladder-eps1": Study("plan", 63, "9 min", "docs/ladder/index.md",
                          "the ladder's epsilon = 1 rung: mu_max on the chain under a dead weight (200-ms ramp)"),
     "ladder-eps1-slow": Study("plan", 27, "47 min", "docs/ladder/index.md",
