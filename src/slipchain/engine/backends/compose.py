@@ -750,11 +750,10 @@ def _row_loop(body: str):
 
 @functools.cache
 def _loop(body: str, adaptive: bool | str):
-    step = stepper(body, adaptive)
+    explicit, commit, fastmath = _body(body)
     if body.startswith("lattice"):
-        explicit, commit, fastmath = _body(body)
-        return kernel_driver(step_sample(step) if adaptive else fixed_sample(explicit, commit, fastmath))
-    return rows_driver(step, _body(body)[2] and not adaptive)
+        return kernel_driver(step_sample(stepper(body, adaptive)) if adaptive else fixed_sample(explicit, commit, fastmath))
+    return rows_driver(stepper(body, adaptive), fastmath and not adaptive)
 
 
 __all__ = ["BODIES", "adaptive_stepper", "advance", "fft_advance", "fixed_stepper", "kernel_advance", "kernel_driver",
