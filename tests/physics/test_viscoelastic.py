@@ -180,8 +180,9 @@ def test_default_compound_and_temperature_shift():
         make_config(material="prony", prony_E=[1e6, 2e6], prony_tau=[1e-3])
     with pytest.raises(ConfigError, match="'temperature' .*WLF's range"):
         make_config(material="prony", temperature=20.0 - c.C2 - 1.0)
+    make_config(material="prony", geometry="slab", N=8, Ly=8)  # the spring drive: the top a state of its own
     with pytest.raises(ConfigError, match="runs on the slab under the dead weight only"):
-        make_config(material="prony", geometry="slab", N=8, Ly=8)  # the spring drive
+        make_config(material="prony", geometry="slab", N=8, Ly=8, integrator="implicit")  # not in backward Euler
     make_config(material="prony", geometry="halfspace", N=8, Ly=8)  # the half-space's k(q != 0) is the rubber's
     # the adaptive step runs, below fold's accuracy bound 0.1/omega0 and at its own tolerance
     ad = make_config(material="prony", integrator="adaptive")
@@ -286,3 +287,78 @@ def test_adaptive_step_with_the_rubber_agrees_with_the_fold_step_over_many_event
         assert abs(ad["mu_star"] - fold["mu_star"]) < 2.0 * se, (ad["mu_star"], fold["mu_star"], se)
         assert 0 < se < 0.02  # a measured friction, not a blank window
         assert ad["check_energy_balance"] < 1e-4 and fold["check_energy_balance"] < 1e-4
+
+
+# The slab under the drive springs (the top a state of its own: model.elastic.slab_twoport,
+# backends.viscoelastic.top_solve)
+SPRUNG = dict(geometry="slab", N=8, Ly=8, theta=0.5, seed=3, integrator="fold", output_interval=1e-5)
+
+
+def test_sprung_slab_with_fast_arms_is_the_relaxed_elastic_slab():
+    """tau -> 0: the arms carry nothing, and the top's solve, mode by mode, gives back the elastic slab in
+    series with the springs (the kernel of model.elastic, an independent formula) to round-off."""
+    common = dict(**SPRUNG, start="steady", t_total=3e-4, dt=5e-8)
+    elastic = run(make_config(**common), progress=False)
+    relaxed = run(make_config(**common, **_limit(1e-30)), progress=False)
+    assert relaxed["f_d"].values == pytest.approx(elastic["f_d"].values, rel=1e-9, abs=1e-18)
+    assert relaxed["x"].values == pytest.approx(elastic["x"].values, rel=1e-9, abs=1e-18)
+    assert relaxed.attrs["W_bulk"] == pytest.approx(0.0, abs=1e-12 * abs(elastic.attrs["W_damping"]))
+
+
+def test_sprung_slab_with_slow_arms_is_the_stiffer_elastic_slab_on_the_same_springs():
+    """tau -> infinity: an arm is a spring in parallel, so the slab is the elastic one at E_inf + E_1 while the
+    drive springs stay at E_inf's. The reference is the elastic engine with that kernel (model.elastic's
+    series formula at the stiffer modulus and the softer springs) put into its batch by hand; the rubber
+    dissipates nothing but the step's error."""
+    from slipchain.engine.backends.base import Batch
+    from slipchain.engine.backends.compose import advance
+    from slipchain.engine.scheme import O_FD, P_K, P_KD, P_META
+    from slipchain.model.elastic import slab_kernel, wavenumbers
+    from slipchain.model.system import initial_state
+
+    common = dict(**SPRUNG, start="rest", t_total=3e-4, dt=5e-8)
+    unrelaxed = run(make_config(**common, **_limit(1e30)), progress=False)
+    soft = make_config(**common)
+    stiff = make_config(**{**common, "E": soft.E + 1e7})
+    system = build_system(stiff)
+    batch = Batch.pack([system], [initial_state(system)])
+    soft_batch = Batch.pack([build_system(soft)], [initial_state(build_system(soft))])
+    batch.kernel[0] = soft.a**2 * slab_kernel(*wavenumbers(soft.N, soft.Ly, soft.a), stiff.H, stiff.G, stiff.nu,
+                                              soft.kappa_d)
+    batch.params[0, P_KD] = soft.K_d
+    batch.params[0, P_META] = soft_batch.params[0, P_META]  # radiation damping at the relaxed modulus
+    batch.params[0, P_K] = soft.K  # (the slab's body reads the kernel, not K)
+    assert np.array_equal(batch.params[0], soft_batch.params[0])
+    out = advance(batch, unrelaxed["f_d"].size, soft.sample_steps).out
+    reference = out[0, :, O_FD]
+    assert unrelaxed["f_d"].values == pytest.approx(reference, rel=1e-6, abs=1e-9 * np.abs(reference).max())
+    assert np.abs(reference).max() > 0
+    # first order in the step (measured 5.1e-8 of W_drive at 5e-8 s, halving with the step), as on the plate's slab
+    assert unrelaxed.attrs["W_bulk"] == pytest.approx(0.0, abs=1e-6 * abs(unrelaxed.attrs["W_drive"]))
+
+
+def test_sprung_slab_energy_balance_converges_with_the_arms_dissipating():
+    """The default compound on the slab under the drive springs: the balance's residual, the top's arms'
+    work included, falls with the step; W_bulk < 0 and converging."""
+    res, bulk = [], []
+    for dt in (1e-7, 5e-8, 2.5e-8):
+        ds = run(make_config(**SPRUNG, material="prony", start="steady", t_total=1e-3, dt=dt), progress=False)
+        assert ds.attrs["status"] == "completed", ds.attrs["message"]
+        res.append(ds.attrs["check_energy_balance"])
+        bulk.append(ds.attrs["W_bulk"])
+    assert all(b < 0 for b in bulk)
+    assert res[0] / res[1] > 2.0 and res[1] / res[2] > 2.0
+    assert abs(bulk[1] - bulk[2]) < abs(bulk[0] - bulk[1])
+
+
+def test_sprung_slab_energy_of_the_relaxed_top_is_the_series_kernels():
+    """The stored energy with the top as a state (results.checks.top_energies, the two-port's quadratic form,
+    top in its relaxed equilibrium) equals the elastic slab's from the series kernel, for a random state."""
+    from slipchain.results.checks import stored_energy
+
+    rng = np.random.default_rng(5)
+    n = 64
+    state = State(1e-7 * rng.standard_normal(n), 1e-3 * rng.standard_normal(n), np.zeros(n), np.zeros(n), 40000)
+    elastic = stored_energy(build_system(make_config(**SPRUNG, t_total=1e-3)), state)
+    sprung = build_system(make_config(**SPRUNG, t_total=1e-3, material="prony"))
+    assert stored_energy(sprung, state) == pytest.approx(elastic, rel=1e-10)

@@ -128,3 +128,28 @@ def test_elastic_force_of_single_modes_and_of_a_uniform_shift():
     f1, f2 = elastic_force(u1, 0.0, k, a), elastic_force(u2, 0.0, k, a)
     assert np.max(np.abs(elastic_force(u1 + 2 * u2, 0.0, k, a) - (f1 + 2 * f2))) <= 1e-12 * np.max(np.abs(f1))
     assert f1.sum() == pytest.approx(-a * a * k[0, 0] * u1.sum(), rel=1e-10)
+
+
+@pytest.mark.parametrize("nu", [0.0, 0.3, 0.5])
+def test_two_port_gives_back_the_clamped_and_the_sprung_kernels(nu):
+    """The slab's two-port (issue 28): A is the clamped kernel; eliminating the top, held by springs kappa,
+    channel by channel gives the series kernel of the boundary-value problem; the P-SV solve's two
+    off-diagonal entries agree (reciprocity, not assumed by the solve); q -> 0 is the uniform shear."""
+    from slipchain.model.elastic import _psv_twoport_full, slab_kernel, slab_twoport, wavenumbers
+
+    H, G, kappa = 1e-3, 3e6, 2e9
+    qx, qy = wavenumbers(16, 8, 1e-4)
+    A, BP, BS, DP, DS = slab_twoport(qx, qy, H, G, nu)
+    assert A == pytest.approx(slab_kernel(qx, qy, H, G, nu), rel=1e-11)
+    q2 = qx * qx + qy * qy
+    wp = np.where(q2 > 0, qx * qx / np.where(q2 > 0, q2, 1.0), 1.0)
+    ws = 1.0 - wp
+    k12p = np.divide(BP, wp, out=np.zeros_like(BP), where=wp > 0)
+    k12s = np.divide(BS, ws, out=np.zeros_like(BS), where=ws > 0)
+    series = A - wp * k12p**2 / (DP + kappa) - ws * k12s**2 / (DS + kappa)
+    assert series == pytest.approx(slab_kernel(qx, qy, H, G, nu, kappa), rel=1e-10)
+    assert (A[0, 0], BP[0, 0], DP[0, 0]) == pytest.approx((G / H, -G / H, G / H))
+    q = np.array([3e2, 3e3, 1e4])  # qH = 0.3, 3, 10
+    k11, k12, k21, k22 = _psv_twoport_full(q, H, G, nu)
+    assert k12 == pytest.approx(k21, rel=1e-7)
+    assert np.all(k11 * k22 > k12 * k21) and np.all(k11 > 0)  # positive definite (K12 changes sign with qH in P-SV)

@@ -49,7 +49,7 @@ READS = (1, 2)  # formats this version reads: 1 lacks the bulk's state and the b
 CHECKPOINT_EVERY = 60.0  # default wall-time seconds between checkpoints (slipchain run --checkpoint-every)
 # The batch's arrays; geometry, shape, the elastic kernel and the adaptive step's folds and control follow from the configs (Batch.pack).
 _BATCH_FIELDS = [f.name for f in fields(Batch)
-                 if f.name not in ("geometry", "shape", "kernel", "folds", "step_control", "material")]
+                 if f.name not in ("geometry", "shape", "kernel", "folds", "step_control", "material", "twoport")]
 
 
 class CheckpointError(ValueError):

@@ -65,6 +65,13 @@ N_OUT = 3
 A_WDRIVE, A_WDAMP, A_WCONTACT, A_WVISC = range(4)  # work by drive point, damping, contacts, the bulk's Maxwell arms
 N_ACC = 4
 BODY_ROWS = 4  # material 'prony': work rows of a row's body state after its 2 J internal fields (backends.viscoelastic)
+# material 'prony' on the slab under the drive springs: the top's rows after those (State.top; backends.viscoelastic):
+# Z_P, Z_S, J arms of channel P, J of S, and one row [drive force sum, step of the last solve]
+
+
+def top_rows(J: int) -> int:
+    """Rows of the top's state in the body state (2 J + 3; they start at row 2 J + BODY_ROWS)."""
+    return 2 * J + 3
 C_F, C_U, C_U2, C_SLOW = range(4)  # per-contact sums over steps: force, u, u^2, steps with |u| < slow
 N_CACC = 4
 Y_LOG, Y_P, Y_Q = range(3)  # per-contact solver state: y = log10(|u|/v*), p = 10**y, q = exp(-c y^2)

@@ -114,6 +114,85 @@ def k_psv_bvp(q: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None
     return -sol[..., 1]
 
 
+def k_psv_twoport_bvp(q: ArrayLike, H: float, G: float, nu: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(K11, K12, K22) of the layer's in-plane (P-SV) two-port (:func:`slab_twoport`) from its
+    boundary-value problem (module docstring), for qH up to ~25: the bottom's traction
+    ``-(K11 u_b + K12 u_t)`` and the top's ``-(K12 u_b + K22 u_t)`` for tangential displacements u_b
+    (normal stress free there) and u_t (normal displacement zero there). K21 = K12 (reciprocity) is
+    checked by the tests, not assumed: the solve gives it separately (:func:`_psv_twoport_full`)."""
+    k11, k12, k21, k22 = _psv_twoport_full(q, H, G, nu)
+    return k11, 0.5 * (k12 + k21), k22
+
+
+def _psv_twoport_full(q: ArrayLike, H: float, G: float, nu: float):
+    from scipy.linalg import expm
+
+    q = np.asarray(q, float)
+    A = np.zeros(q.shape + (4, 4))
+    c1, c2 = nu / (1 - nu), (1 - 2 * nu) / (2 * G * (1 - nu))
+    A[..., 0, 1], A[..., 0, 2] = -q, 1.0 / G
+    A[..., 1, 0], A[..., 1, 3] = c1 * q, c2
+    A[..., 2, 0], A[..., 2, 3] = 2 * G * q * q / (1 - nu), -c1 * q
+    A[..., 3, 2] = q
+    P = expm(A * H)  # y(H) = P y(0), y(0) = (U0, W0, S0, 0)
+    M = np.stack([np.stack([P[..., 1, 1], P[..., 1, 2]], -1), np.stack([P[..., 0, 1], P[..., 0, 2]], -1)], -2)
+    out = []
+    for ub, ut in ((1.0, 0.0), (0.0, 1.0)):  # W(H) = 0, U(H) = u_t
+        rhs = np.stack([-ub * P[..., 1, 0], ut - ub * P[..., 0, 0]], -1)
+        w0, s0 = np.moveaxis(np.linalg.solve(M, rhs[..., None])[..., 0], -1, 0)
+        sh = ub * P[..., 2, 0] + w0 * P[..., 2, 1] + s0 * P[..., 2, 2]
+        out.append((-s0, sh))  # the body's force on the bottom is S(0), on the top -S(H)
+    (k11, k21), (k12, k22) = out
+    return k11, k12, k21, k22
+
+
+def slab_twoport(qx: ArrayLike, qy: ArrayLike, H: float, G: float, nu: float) -> tuple[np.ndarray, ...]:
+    """The slab as a two-port per Fourier mode (issue 28: the viscoelastic slab under the drive springs).
+
+    The slab's bottom (the interface, tangential displacement u_b along x, normal stress free) and its
+    top (tangential displacement u_t, normal displacement zero) carry the tractions, per area and per
+    channel c (P-SV: along q; SH: across q)::
+
+        t_b = -(K11c u_b + K12c u_t),   t_t = -(K12c u_b + K22c u_t)
+
+    SH in closed form (K11 = K22 = G q coth x, K12 = -G q / sinh x, x = qH), P-SV from the
+    boundary-value problem (:func:`k_psv_twoport_bvp`); q -> 0: G/H (1, -1; -1, 1); qH above
+    QH_HALFSPACE: the half-space values and K12 = 0 (|K12| ~ x exp(-x) there, and what it changes in
+    the bottom's force, K12**2 / K22, is below 1e-15 of it). Every entry is G times a function of q:
+    linear in the modulus, as the Maxwell arms need. With the bottom moving along x only, the top's
+    displacement in channel c is ``w_c Z_c`` with ``w_P = qx/q``, ``w_S = qy/q`` (the scalar model of
+    the module docstring), and the top field Z_c is real in space. Returns, on the (qx, qy) grid::
+
+        A = w_P**2 K11P + w_S**2 K11S   (the clamped kernel, :func:`slab_kernel` with the top held)
+        B_P, B_S = w_c**2 K12c          (the top's pull on the bottom)
+        D_P, D_S = K22c                 (the top's own stiffness)
+
+    so that the bottom's force is ``-(A u + B_P Z_P + B_S Z_S)`` and channel c's top, held by springs
+    kappa per area, is in equilibrium where ``K12c u + K22c Z_c + kappa Z_c = 0`` (q != 0; the
+    drive's displacement enters the uniform mode, channel P). Eliminating Z gives back
+    :func:`slab_kernel` with the springs (tests/unit/test_elastic.py). At q = 0: w_P = 1, w_S = 0.
+    """
+    qx, qy = np.broadcast_arrays(np.asarray(qx, float), np.asarray(qy, float))
+    q = np.hypot(qx, qy)
+    x = q * H
+    small = x < 1e-12
+    far = x > QH_HALFSPACE
+    mid = ~(small | far)
+    xs = np.where(mid, x, 1.0)
+    Gq = G * q
+    s11 = np.where(mid, Gq / np.tanh(xs), np.where(far, Gq, G / H))
+    s12 = np.where(mid, -Gq / np.sinh(xs), np.where(far, 0.0, -G / H))
+    p11 = np.where(far, Gq / (1 - nu), G / H)
+    p12 = np.where(far, 0.0, -G / H)
+    p22 = p11.copy()
+    if mid.any():
+        p11[mid], p12[mid], p22[mid] = k_psv_twoport_bvp(q[mid], H, G, nu)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        wp = np.where(q > 0, qx * qx / (q * q), 1.0)
+    ws = 1.0 - wp
+    return wp * p11 + ws * s11, wp * p12, ws * s12, p22, s11.copy()
+
+
 def _mix(qx: ArrayLike, qy: ArrayLike, kp: np.ndarray, ks: np.ndarray, k0: float) -> np.ndarray:
     qx, qy = np.broadcast_arrays(np.asarray(qx, float), np.asarray(qy, float))
     q2 = qx * qx + qy * qy
@@ -169,6 +248,32 @@ def elastic_kernel(cfg) -> np.ndarray:
     return cfg.a**2 * config_kernel(cfg, *wavenumbers(cfg.N, cfg.Ly, cfg.a))
 
 
+def twoport_kernel(cfg) -> np.ndarray:
+    """a**2 times the slab's two-port (:func:`slab_twoport`) on the rfft2 grid of a config's (N, Ly)
+    interface, stacked (6, Lx, Ly//2 + 1): A, w_P**2 (not scaled), K12P, K12S, K22P, K22S [N/m]."""
+    A, bp, bs, dp, ds = slab_twoport(*wavenumbers(cfg.N, cfg.Ly, cfg.a), cfg.H, cfg.G, cfg.nu)
+    qx, qy = wavenumbers(cfg.N, cfg.Ly, cfg.a)
+    q2 = qx * qx + qy * qy
+    with np.errstate(invalid="ignore", divide="ignore"):
+        wp = np.where(q2 > 0, qx * qx / q2, 1.0)
+        k12p = np.where(wp > 0, bp / wp, 0.0)
+        k12s = np.where(wp < 1, bs / (1.0 - wp), 0.0)
+    a2 = cfg.a**2
+    return np.stack([a2 * A, wp, a2 * k12p, a2 * k12s, a2 * dp, a2 * ds])
+
+
+def parseval_weights(Lx: int, Ly: int) -> np.ndarray:
+    """w on the rfft2 grid with sum_r f g = sum_q w Re(F conj G) for real (Lx, Ly) fields f, g of
+    transforms F, G: 2/n on the columns that stand for two of the full grid, 1/n on ky = 0 (and on
+    ky = Ly/2 for even Ly), n = Lx Ly."""
+    n = Lx * Ly
+    w = np.full((Lx, Ly // 2 + 1), 2.0 / n)
+    w[:, 0] = 1.0 / n
+    if Ly % 2 == 0:
+        w[:, -1] = 1.0 / n
+    return w
+
+
 def wavenumbers(Lx: int, Ly: int, a: float) -> tuple[np.ndarray, np.ndarray]:
     """(qx, qy) on the grid of ``rfft2`` of an (Lx, Ly) periodic field of spacing a (1/m), shapes
     (Lx, Ly//2 + 1): the full axis first, the half axis last."""
@@ -189,4 +294,4 @@ def elastic_force(u: np.ndarray, X: float | np.ndarray, k_half: np.ndarray, a: f
     return -(a * a) * fft.irfft2(k_half * fft.rfft2(d), s=d.shape)
 
 
-__all__ = ["QH_HALFSPACE", "config_kernel", "elastic_force", "elastic_kernel", "uniform_stiffness", "interface_kernel", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]
+__all__ = ["QH_HALFSPACE", "k_psv_twoport_bvp", "parseval_weights", "slab_twoport", "twoport_kernel", "config_kernel", "elastic_force", "elastic_kernel", "uniform_stiffness", "interface_kernel", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]

@@ -31,6 +31,9 @@ def stored_energy(system: System, state: State) -> float:
     x, u, X, U = state.x, state.u, state.X, state.U
     drive = cfg.v_d * state.step * cfg.dt
     kinetic = 0.5 * cfg.m * np.sum(u * u) + 0.5 * cfg.upper_mass * np.sum(U * U)
+    if cfg.material == "prony" and cfg.geometry == "slab" and cfg.dead_weight is None:  # the top a state of its own
+        el, arms = top_energies(cfg, state)
+        return float(kinetic + el + arms)
     if geometry_of(cfg).spectral:  # the quasi-static body: (1/2) sum (x - d) . (-F_el)
         from ..model.elastic import elastic_force
         from ..model.system import elastic_kernel
@@ -65,6 +68,8 @@ def arm_energy(system: System, state: State) -> float:
     if cfg.material != "prony" or state.xi is None:
         return 0.0
     r = np.asarray(cfg.prony_E) / cfg.E
+    if cfg.geometry == "slab" and cfg.dead_weight is None:
+        return top_energies(cfg, state)[1]
     if geometry_of(cfg).spectral:  # xi relative to the plate (dead weight), U = (1/2) xi . a^2 k xi, k the arms' kernel
         from ..model.elastic import elastic_force
         from ..model.system import elastic_kernel
@@ -74,6 +79,48 @@ def arm_energy(system: System, state: State) -> float:
         g = state.xi[0].reshape(r.size, cfg.N, cfg.Ly)
         return float(sum(-0.5 * r[j] * np.sum(g[j] * elastic_force(g[j], 0.0, kern, 1.0)) for j in range(r.size)))
     return float(sum(r[j] * bulk_energy(cfg, state.xi[0, j], state.xi[1, j]) for j in range(r.size)))
+
+
+def top_energies(cfg, state: State) -> tuple[float, float]:
+    """(elastic energy of slab and drive springs, energy held by the Maxwell arms) [J] of the viscoelastic
+    slab under the drive springs, whose top is a state of its own (the two-port of
+    :func:`slipchain.model.elastic.slab_twoport`; :mod:`slipchain.engine.backends.viscoelastic`). Per mode
+    and channel c, with W_c = w_c**2 (the top's displacement is w_c Z_c)::
+
+        U_el  = 1/2 [A |x|^2 + sum_c W_c (2 K12c Re(x* Z_c) + (K22c + kappa) |Z_c|^2)]   (uniform mode: kappa |Z_P - n X_d|^2)
+        U_arm = sum_j r_j/2 [A |xi_bj|^2 + sum_c W_c (2 K12c Re(xi_bj* xi_cj) + K22c |xi_cj|^2)]
+
+    summed with Parseval's weights. A state without the top's (``state.top`` None: a run's start) has
+    its top in the relaxed equilibrium, as the first step puts it."""
+    from ..model.elastic import parseval_weights, twoport_kernel
+
+    tp = twoport_kernel(cfg)
+    A, W = tp[0], np.stack([tp[1], 1.0 - tp[1]])
+    K12, K22 = tp[2:4], tp[4:6]
+    kap = cfg.K_d
+    g = (cfg.N, cfg.Ly)
+    wgt = parseval_weights(*g)
+    r = np.asarray(cfg.prony_E) / cfg.E
+    J = r.size
+    xh = np.fft.rfft2(state.x.reshape(g))
+    xib = np.fft.rfft2(state.xi[0].reshape((J,) + g)) if state.xi is not None else np.zeros((J,) + xh.shape, complex)
+    xd = cfg.v_d * state.step * cfg.dt * cfg.n_blocks
+    if state.top is not None:
+        spec = np.fft.rfft2(state.top[:2 + 2 * J].reshape((2 + 2 * J,) + g))
+        Z, xit = spec[:2], spec[2:].reshape((2, J) + xh.shape)
+    else:  # the relaxed equilibrium with the top's arms at zero
+        xit = np.zeros((2, J) + xh.shape, complex)
+        ub = xh + np.tensordot(r, xib, 1)
+        rhs = np.zeros((2,) + xh.shape, complex)
+        rhs[0, 0, 0] = kap * xd
+        Z = (rhs - K12 * ub) / (K22 + kap)
+    el = A * abs(xh) ** 2 + np.sum(W * (2 * K12 * (np.conj(xh) * Z).real + (K22 + kap) * abs(Z) ** 2), axis=0)
+    el[0, 0] += kap * (abs(Z[0, 0, 0] - xd) ** 2 - abs(Z[0, 0, 0]) ** 2)
+    arms = 0.0
+    for j in range(J):
+        q = A * abs(xib[j]) ** 2 + np.sum(W * (2 * K12 * (np.conj(xib[j]) * xit[:, j]).real + K22 * abs(xit[:, j]) ** 2), axis=0)
+        arms += r[j] * np.sum(wgt * q)
+    return float(0.5 * np.sum(wgt * el)), float(0.5 * arms)
 
 
 @dataclass(frozen=True)

@@ -94,7 +94,8 @@ def batches(members: list[Member], size: int) -> list[list[Member]]:
     for m in members:
         c = m.config
         groups.setdefault((c.N, c.Ly, c.geometry, c.dt, c.sample_steps, c.integrator == "adaptive",
-                           c.integrator == "implicit", c.min_cycles > 0), []).append(m)
+                           c.integrator == "implicit", c.min_cycles > 0, c.material, len(c.prony_E or ()),
+                           c.material == "prony" and c.dead_weight is None), []).append(m)
     out = []
     for g in groups.values():
         out += [g[i:i + size] for i in range(0, len(g), size)]

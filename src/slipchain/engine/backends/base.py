@@ -13,6 +13,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ...model.elastic import twoport_kernel
 from ...model.system import State, System, dead_weight_force, elastic_kernel
 from ...model.geometries import geometry_of
 from ...results.observables import SLOW_FRACTION
@@ -55,6 +56,9 @@ class Batch:
     # (B, N_CARRY + 2N) with integrator = 'implicit', else (B, 0): the stepper's level, error memory and back-off
     # (:data:`.compose.CT_LEVEL` ...) and the last step's accelerations, carried from one output sample to the next
     carry: np.ndarray | None = None
+    # material 'prony' on the slab under the drive springs: (B, 6, Lx, Ly//2 + 1), the slab's two-port
+    # (model.elastic.twoport_kernel), whose top is then a state of its own (State.top); else None
+    twoport: np.ndarray | None = None
 
     @property
     def implicit(self) -> bool:
@@ -117,7 +121,10 @@ class Batch:
         J = n_terms.pop()
         n = c0.n_blocks
         material = np.zeros((b, 2, J))
-        bstate = np.zeros((b, 2 * J + S.BODY_ROWS if J else 0, n))
+        top = bool(J) and _has_top(c0)
+        if any(_has_top(s.config) != top for s in systems):
+            raise ValueError("a batch of the viscoelastic slab is under the drive springs in all its rows or in none")
+        bstate = np.zeros((b, 2 * J + S.BODY_ROWS + (S.top_rows(J) if top else 0) if J else 0, n))
         if J:
             from ...model.viscoelastic import terms
 
@@ -125,6 +132,12 @@ class Batch:
                 material[r, 0], material[r, 1] = terms(s.config)
                 if states[r].xi is not None:
                     bstate[r, :2 * J] = states[r].xi.reshape(2 * J, n)
+                if top:
+                    t0 = 2 * J + S.BODY_ROWS
+                    if states[r].top is not None:
+                        bstate[r, t0:] = states[r].top
+                    else:
+                        bstate[r, -1, 1] = -1.0  # never solved: the relaxed equilibrium at the first step
         return cls(
             x=np.stack([s.x for s in states]).astype(float),
             u=np.stack([s.u for s in states]).astype(float),
@@ -145,13 +158,20 @@ class Batch:
             bstate=bstate,
             material=material,
             carry=np.zeros((b, N_CARRY + 2 * n) if c0.integrator == "implicit" else (b, 0)),
+            twoport=np.stack([twoport_kernel(s.config) for s in systems]) if top else None,
         )
 
     def state(self, row: int) -> State:
         J = self.material.shape[2] if self.material is not None else 0
         xi = self.bstate[row, :2 * J].reshape(2, J, -1).copy() if J else None
+        top = self.bstate[row, 2 * J + S.BODY_ROWS:].copy() if self.twoport is not None else None
         return State(self.x[row].copy(), self.u[row].copy(), self.X[row].copy(), self.U[row].copy(), int(self.step[row]),
-                     xi)
+                     xi, top)
+
+
+def _has_top(cfg) -> bool:
+    """The slab's top is a state of its own: material 'prony' on the slab under the drive springs."""
+    return cfg.material == "prony" and cfg.geometry == "slab" and cfg.dead_weight is None
 
 
 def _kernels(systems: list[System]) -> np.ndarray | None:

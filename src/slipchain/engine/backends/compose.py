@@ -51,8 +51,9 @@ import numba as nb
 import numpy as np
 
 from ...model.geometries import GEOMETRIES
+from ...model.elastic import parseval_weights
 from ...model.viscoelastic import arm_kernel
-from ..scheme import (A_WCONTACT, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_DT,
+from ..scheme import (A_WCONTACT, BODY_ROWS, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_DT,
                       P_ETAC, P_FOLD, P_KD, P_M, P_SLOW, P_VD)
 from . import implicit, spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
@@ -521,8 +522,15 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
             batch.bstate[:, 2 * J + 2] = both[b:]
             return both[:b] + both[b:]
 
+    top = _TopDriver(batch, fft, acc) if batch.twoport is not None else None
+    if top is not None:
+        force = top.force  # noqa: F811 - the viscoelastic slab under the drive springs
+
     adaptive, folds, control = _stepper_inputs(batch)
-    step_rows = loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name)
+    if top is not None:
+        step_rows = _loop("spectral-prony-top", adaptive)
+    else:
+        step_rows = loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name)
     ctl = np.zeros((b, N_CT), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, cmax)
@@ -537,7 +545,61 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
                       batch.vstar, batch.n_contacts, batch.ysolve, folds, control, batch.bstate, batch.material, ctl,
                       aprev, cacc, acc, fd, sample_steps, batch.status, scratch)
         spectral.end_sample(batch.x, batch.X, batch.status, batch.step, fd, out, s, sample_steps, acc)
+    if top is not None:
+        top.close()
     return ChunkOutput(out, acc, cacc)
+
+
+class _TopDriver:
+    """The top of the viscoelastic slab under the drive springs through one chunk (:mod:`.viscoelastic`,
+    :func:`.viscoelastic.top_solve`): its fields and arms in Fourier space, loaded from the body state at
+    the chunk's start and written back at its end, after a last solve at the chunk's final step (so that
+    every chunk starts from a top in equilibrium, and a resumed run repeats the same arithmetic)."""
+
+    def __init__(self, batch: Batch, fft, acc: np.ndarray):
+        self.batch, self.fft, self.acc = batch, fft, acc
+        b, n = batch.x.shape
+        self.lx, self.ly = batch.shape
+        J = batch.material.shape[2]
+        self.J, self.t0 = J, 2 * J + BODY_ROWS
+        self.r = batch.material[:, 0, :]
+        grid = batch.bstate[:, self.t0:self.t0 + 2 + 2 * J].reshape(b, 2 + 2 * J, self.lx, self.ly)
+        spec = fft.rfft2(grid, axes=(2, 3))
+        self.Zh = np.ascontiguousarray(spec[:, :2])
+        self.Th = np.ascontiguousarray(spec[:, 2:].reshape(b, 2, J, self.lx, -1))
+        self.ft = np.zeros_like(self.Zh)
+        self.fel = np.zeros_like(spec[:, 0])
+        self.farm = np.zeros_like(self.fel)
+        self.wtop = np.zeros(b)
+        self.wgt = np.repeat(parseval_weights(self.lx, self.ly), 2, axis=-1)  # (float views: .viscoelastic.top_solve)
+        self.tp = np.repeat(batch.twoport, 2, axis=-1)
+
+    def _solve(self):
+        bt, fft = self.batch, self.fft
+        b, n = bt.x.shape
+        g = np.einsum("bj,bjn->bn", self.r, bt.bstate[:, :self.J])
+        spec = fft.rfft2(np.concatenate([bt.x, g]).reshape(2 * b, self.lx, self.ly), axes=(1, 2))
+        f = np.float64
+        viscoelastic.top_solve(spec[:b].view(f), spec[b:].view(f), self.Zh.view(f), self.Th.view(f), self.ft.view(f),
+                               self.tp, bt.material, bt.bstate, bt.step, bt.params, self.wgt, self.fel.view(f),
+                               self.farm.view(f), self.wtop)
+
+    def force(self) -> np.ndarray:
+        b, n = self.batch.x.shape
+        self._solve()
+        both = self.fft.irfft2(np.concatenate([self.fel, self.farm]), s=(self.lx, self.ly), axes=(1, 2),
+                               overwrite_x=True).reshape(2 * b, n)
+        self.batch.bstate[:, 2 * self.J + 2] = both[b:]
+        return both[:b] + both[b:]
+
+    def close(self) -> None:
+        bt = self.batch
+        b, n = bt.x.shape
+        self._solve()
+        spec = np.concatenate([self.Zh, self.Th.reshape(b, 2 * self.J, self.lx, -1)], axis=1)
+        bt.bstate[:, self.t0:self.t0 + 2 + 2 * self.J] = self.fft.irfft2(
+            spec, s=(self.lx, self.ly), axes=(2, 3)).reshape(b, 2 + 2 * self.J, n)
+        self.acc[:, A_WVISC] += self.wtop
 
 
 def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
@@ -713,10 +775,12 @@ BODIES = {name: g.body for name, g in GEOMETRIES.items()}  # model.geometries
 
 SPECTRAL = spectral.BODY  # slab, halfspace
 SPECTRAL_PRONY = (viscoelastic.slab_prony_explicit, viscoelastic.slab_prony_commit, True)  # slab, dead weight, prony
+SPECTRAL_PRONY_TOP = (viscoelastic.slab_top_prony_explicit, viscoelastic.slab_prony_commit, True)  # slab, springs, prony
 
 
 def _body(name: str):
-    return {"lattice": LATTICE, "lattice-prony": LATTICE_PRONY, "spectral": SPECTRAL, "spectral-prony": SPECTRAL_PRONY}[name]
+    return {"lattice": LATTICE, "lattice-prony": LATTICE_PRONY, "spectral": SPECTRAL, "spectral-prony": SPECTRAL_PRONY,
+            "spectral-prony-top": SPECTRAL_PRONY_TOP}[name]
 
 
 @functools.cache

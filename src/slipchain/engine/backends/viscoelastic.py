@@ -30,7 +30,9 @@ import math
 
 import numba as nb
 
-from ..scheme import BODY_ROWS, FASTMATH, P_K, P_KL, P_KLY, P_KT, P_KY, P_LAT, P_LY, P_M, P_ML
+import numpy as np
+
+from ..scheme import BODY_ROWS, FASTMATH, P_DT, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_LAT, P_LY, P_M, P_META, P_ML, P_VD
 from .cpu import lattice_commit, lattice_explicit
 from .spectral import body_commit, body_explicit
 
@@ -174,6 +176,155 @@ def slab_prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     return body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)[0], w_visc
 
 
+# The slab under the drive springs (issue 28): the springs hold the slab's top, so k(q) is the slab in
+# series with them, not linear in the modulus. The slab is then a two-port per mode
+# (:func:`slipchain.model.elastic.slab_twoport`, channels P and S), linear in the modulus in each
+# entry, and the top's displacement is a state of its own: the fields Z_P, Z_S (real in space), kept in
+# Fourier space through a chunk by the FFT driver (:func:`.compose.fft_advance`) and in the body state
+# between chunks (rows from 2J + BODY_ROWS, scheme.top_rows). The top is massless: after every step it is
+# put in equilibrium with the blocks (:func:`top_solve`), its Maxwell arms advanced by the same exponential
+# rule over the step. The blocks then feel -(A (x + g_b) + sum_c w_c**2 K12c (Z_c + g_tc)) (g: the arms'
+# combined fields), of which the arms' part is kept in work row 2J + 2 as on the plate's slab; the drive
+# is the springs' pull on the top's uniform mode, kappa a**2 (v_d t - <Z_P>) per block.
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def slab_top_prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
+    """The viscoelastic slab's explicit part under the drive springs: ``Fr`` is the body's whole force
+    (the drive reaches the blocks through the top); returns the drive springs' force sum, which the
+    top's solve left in the body state."""
+    n = xr.size
+    dtm = h / p[P_M]
+    meta = p[P_META]
+    vd = p[P_VD]
+    for i in range(n):
+        d = -meta * (ur[i] - vd)
+        un[i] = ur[i] + dtm * (Fr[i] + d)
+        dampx[i] = d
+    for i in range(n):
+        Un[i] = Ur[i]
+    J = mt.shape[1]
+    return br[4 * J + BODY_ROWS + 2, 0]
+
+
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def top_solve(xh, gbh, Zh, Th, ft, tp, mt, bs, steps, params, wgt, fel, farm, wtop):
+    """Put every row's top in equilibrium with its blocks (the module's comment above), in Fourier space.
+
+    Every complex array is given as its float64 view (real and imaginary parts interleaved along the
+    last axis), and the coefficient arrays tp, wgt with every entry repeated twice to match: every
+    coefficient is real, so the parts never mix and the loops run over unit-stride floats.
+    xh, gbh: (B, Lx, 2 Lh) transforms of the blocks' displacements and of their arms' combined field;
+    Zh (B, 2, Lx, Lh) the top's fields, Th (B, 2, J, Lx, Lh) its arms, ft (B, 2, Lx, Lh) the arms' force
+    on the top at the last call (updated in place); tp (B, 6, Lx, Lh) :func:`~slipchain.model.elastic.twoport_kernel`;
+    bs the body state (its last row: the drive force sum and the step of the last solve, written
+    here). Per row, with h the time since the last solve (none: the state is kept; never solved: the
+    relaxed equilibrium, the arms as they are, no work)::
+
+        (K22 (1 + S) + kappa) Z' = kappa X_d - K12 (x + g_b) - K22 (sum_j r_j a_j xi_j - S Z),  S = sum_j r_j c_j / h
+        xi_j <- a_j xi_j + c_j (Z' - Z) / h,   c_j = tau_j (1 - a_j)
+
+    (channel by channel; X_d = n v_d t in the uniform mode of channel P). The arms' work on the top over
+    the step, by the trapezoidal rule in Z, is added to wtop. Returns in fel, farm the transforms of the
+    body's force on the blocks, elastic and the arms'."""
+    b = xh.shape[0]
+    nm = xh[0].size  # real and imaginary parts interleaved: every coefficient is real
+    J = mt.shape[2]
+    meta = 4 * J + BODY_ROWS + 2
+    a = np.empty(J)
+    cc = np.empty(J)
+    gp = np.empty(nm)
+    gt = np.empty(nm)
+    dz = np.empty(nm)
+    w2 = wgt.reshape(nm)
+    for row in range(b):
+        p = params[row]
+        kap = p[P_KD]
+        last = bs[row, meta, 1]
+        st = steps[row]
+        relaxed = last < 0.0
+        ds = 0.0 if relaxed else st - last
+        solve = relaxed or ds > 0.0
+        S = 0.0
+        if solve and not relaxed:
+            h = ds * p[P_DT]
+            for j in range(J):
+                tau = mt[row, 1, j]
+                a[j] = math.exp(-h / tau)
+                cc[j] = -tau * math.expm1(-h / tau) / h
+                S += mt[row, 0, j] * cc[j]
+        xd = p[P_VD] * st * p[P_DT] * bs.shape[2]  # n v_d t
+        x = xh[row].reshape(nm)
+        gb = gbh[row].reshape(nm)
+        A = tp[row, 0].reshape(nm)
+        wp = tp[row, 1].reshape(nm)
+        fe = fel[row].reshape(nm)
+        fa = farm[row].reshape(nm)
+        for m in range(nm):
+            fe[m] = -A[m] * x[m]
+            fa[m] = -A[m] * gb[m]
+        w = 0.0
+        for c in range(2):
+            k12 = tp[row, 2 + c].reshape(nm)
+            d = tp[row, 4 + c].reshape(nm)
+            z = Zh[row, c].reshape(nm)
+            f = ft[row, c].reshape(nm)
+            if solve:
+                for m in range(nm):
+                    gp[m] = 0.0
+                for j in range(J):  # relaxed: the arms as they are; else their decayed part
+                    rj = mt[row, 0, j] * (1.0 if relaxed else a[j])
+                    th = Th[row, c, j].reshape(nm)
+                    for m in range(nm):
+                        gp[m] += rj * th[m]
+                rhs = kap * xd if c == 0 else 0.0  # the uniform mode's real part, entry 0
+                if relaxed:
+                    for m in range(nm):
+                        zn = (-k12[m] * (x[m] + gb[m]) - d[m] * gp[m]) / (d[m] + kap)
+                        dz[m] = zn - z[m]
+                        z[m] = zn
+                    z[0] += rhs / (d[0] + kap)
+                else:
+                    for m in range(nm):
+                        zn = (-k12[m] * (x[m] + gb[m]) - d[m] * (gp[m] - S * z[m])) / (d[m] * (1.0 + S) + kap)
+                        dz[m] = zn - z[m]
+                        z[m] = zn
+                    z[0] += rhs / (d[0] * (1.0 + S) + kap)
+                    dz[0] += rhs / (d[0] * (1.0 + S) + kap)
+            if solve and not relaxed:  # the arms' update; their combined field is then gp + S dz
+                for j in range(J):
+                    aj = a[j]
+                    cj = cc[j]
+                    th = Th[row, c, j].reshape(nm)
+                    for m in range(nm):
+                        th[m] = aj * th[m] + cj * dz[m]
+                for m in range(nm):
+                    gt[m] = gp[m] + S * dz[m]
+            elif relaxed:
+                for m in range(nm):
+                    gt[m] = gp[m]
+            else:
+                for m in range(nm):
+                    gt[m] = 0.0
+                for j in range(J):
+                    rj = mt[row, 0, j]
+                    th = Th[row, c, j].reshape(nm)
+                    for m in range(nm):
+                        gt[m] += rj * th[m]
+            for m in range(nm):
+                wc = wp[m] if c == 0 else 1.0 - wp[m]
+                fn = -(k12[m] * gb[m] + d[m] * gt[m])
+                if solve and not relaxed:
+                    w += w2[m] * wc * (0.5 * (f[m] + fn)) * dz[m]
+                f[m] = fn
+                fe[m] -= wc * k12[m] * z[m]
+                fa[m] -= wc * k12[m] * gt[m]
+        wtop[row] += w
+        if solve:
+            bs[row, meta, 1] = st
+        bs[row, meta, 0] = kap * (xd - Zh[row, 0, 0, 0])
+
+
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def prony_be_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     """A backward-Euler step's commit on the chains (integrator 'implicit', :class:`.implicit.Arms`):
@@ -190,5 +341,5 @@ def slab_prony_be_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     return body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
 
 
-__all__ = ["BODY_ROWS", "bulk_forces", "combined_fields", "prony_be_commit", "slab_prony_be_commit", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
+__all__ = ["BODY_ROWS", "slab_top_prony_explicit", "top_solve", "bulk_forces", "combined_fields", "prony_be_commit", "slab_prony_be_commit", "prony_commit", "prony_explicit", "slab_prony_commit", "slab_prony_explicit"]
 
