@@ -93,9 +93,8 @@ def k_psv(q: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None = N
     return np.where(small, k0, k)
 
 
-def k_psv_bvp(q: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None = None) -> np.ndarray:
-    """k_PSV from the layer's boundary-value problem (module docstring), for qH up to ~25; top
-    clamped (``kappa_d`` None) or on tangential springs kappa_d per area, normal displacement zero."""
+def _propagator(q: ArrayLike, H: float, G: float, nu: float) -> np.ndarray:
+    """expm(A H) of the plane-strain equations in y = (U, W, S, T) (module docstring), per q."""
     from scipy.linalg import expm
 
     q = np.asarray(q, float)
@@ -105,7 +104,13 @@ def k_psv_bvp(q: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None
     A[..., 1, 0], A[..., 1, 3] = c1 * q, c2
     A[..., 2, 0], A[..., 2, 3] = 2 * G * q * q / (1 - nu), -c1 * q
     A[..., 3, 2] = q
-    P = expm(A * H)  # y(H) = P y(0), y(0) = (1, W0, S0, 0)
+    return expm(A * H)
+
+
+def k_psv_bvp(q: ArrayLike, H: float, G: float, nu: float, kappa_d: float | None = None) -> np.ndarray:
+    """k_PSV from the layer's boundary-value problem (module docstring), for qH up to ~25; top
+    clamped (``kappa_d`` None) or on tangential springs kappa_d per area, normal displacement zero."""
+    P = _propagator(q, H, G, nu)  # y(H) = P y(0), y(0) = (1, W0, S0, 0)
     r1 = P[..., 1, :]  # W(H) = 0
     r2 = P[..., 0, :] if kappa_d is None else P[..., 2, :] + kappa_d * P[..., 0, :]  # U(H) = 0, or S(H) = -kappa_d U(H)
     M = np.stack([np.stack([r1[..., 1], r1[..., 2]], -1), np.stack([r2[..., 1], r2[..., 2]], -1)], -2)
@@ -125,16 +130,7 @@ def k_psv_twoport_bvp(q: ArrayLike, H: float, G: float, nu: float) -> tuple[np.n
 
 
 def _psv_twoport_full(q: ArrayLike, H: float, G: float, nu: float):
-    from scipy.linalg import expm
-
-    q = np.asarray(q, float)
-    A = np.zeros(q.shape + (4, 4))
-    c1, c2 = nu / (1 - nu), (1 - 2 * nu) / (2 * G * (1 - nu))
-    A[..., 0, 1], A[..., 0, 2] = -q, 1.0 / G
-    A[..., 1, 0], A[..., 1, 3] = c1 * q, c2
-    A[..., 2, 0], A[..., 2, 3] = 2 * G * q * q / (1 - nu), -c1 * q
-    A[..., 3, 2] = q
-    P = expm(A * H)  # y(H) = P y(0), y(0) = (U0, W0, S0, 0)
+    P = _propagator(q, H, G, nu)  # y(H) = P y(0), y(0) = (U0, W0, S0, 0)
     M = np.stack([np.stack([P[..., 1, 1], P[..., 1, 2]], -1), np.stack([P[..., 0, 1], P[..., 0, 2]], -1)], -2)
     out = []
     for ub, ut in ((1.0, 0.0), (0.0, 1.0)):  # W(H) = 0, U(H) = u_t
