@@ -53,7 +53,7 @@ except OSError as e:
     print(json.dumps({"skip": str(e)}))
     sys.exit(0)
 before = status("VmRSS")
-c = make_config(N=1_000_000, theta=1.0, t_total=2e-6, output_interval=1e-6, start="steady")
+c = make_config(N=400_000, theta=1.0, t_total=2e-6, output_interval=1e-6, start="steady")
 run(c)
 print(json.dumps({"measured": status("VmHWM") - before, "estimate": estimate_bytes(c)}))
 """

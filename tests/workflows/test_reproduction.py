@@ -130,7 +130,9 @@ def test_small_fig6_sweep_meets_the_papers_claims(tmp_path):
     larger for eta_c = 0.1 omega0 than for omega0. (The full-size numbers are in docs/fig6-paper.)
     """
     sw = make_sweep(ACCEPTANCE)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+    # one worker: each worker process compiles the engine anew (longer than most of these members
+    # take); sweeps on two workers are tests/workflows/test_runner.py's
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=":0") as cluster, Client(cluster) as client:
         rep = run_sweep(sw, tmp_path / "store", client=client, progress=False)
     assert rep.ok, [(o.member.label(), o.message) for o in rep.failed]

@@ -33,7 +33,9 @@ def _cli(*args):
 
 def _sweep(tmp_path, name, material, temperature):
     (tmp_path / f"{name}.toml").write_text(f'name = "{name}"\n' + BASE.format(material=material, temperature=temperature))
-    r = _cli("sweep", str(tmp_path / f"{name}.toml"), "--store", str(tmp_path / name), "--workers", "2", "--no-progress")
+    # one worker: each worker process compiles the kernels anew, and the members are tiny (the
+    # sweep on several workers is tests/workflows/test_runner.py's)
+    r = _cli("sweep", str(tmp_path / f"{name}.toml"), "--store", str(tmp_path / name), "--workers", "1", "--no-progress")
     assert r.returncode == 0, r.stderr
     return tmp_path / name
 

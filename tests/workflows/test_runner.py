@@ -165,17 +165,17 @@ def test_worker_killed_mid_task_is_retried(tmp_path, client):
 
 # The sweep driver stops itself (SIGSTOP) right after storing its k-th member, so that a test acts
 # on it at a known point whatever the machine's speed (issue 30: these tests slept and polled).
-def _slow_sweep(tmp_path, members, stop_after=None, stopping=None):
-    """The command of a `slipchain sweep` of ``members`` one-second members on a 2-process local
-    cluster, its store, and the driver started in a new session (so its cluster can be killed);
-    with ``stop_after`` = k the driver stops itself once it has stored k members (``stopping``: the
-    ``cli_stopping_after_members`` fixture)."""
+def _slow_sweep(tmp_path, members, stop_after=None, stopping=None, workers=2):
+    """The command of a `slipchain sweep` of ``members`` one-second members on a local cluster of
+    ``workers`` processes, its store, and the driver started in a new session (so its cluster can be
+    killed); with ``stop_after`` = k the driver stops itself once it has stored k members
+    (``stopping``: the ``cli_stopping_after_members`` fixture)."""
     definition = tmp_path / "sweep.toml"
     definition.write_text(
         'name = "slow"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\ntheta = 0.5\nintegrator = "fixed"\n'
         f"t_total = {SLOW_T}\n[grid]\nseed = [{', '.join(map(str, range(members)))}]\n")
     store = tmp_path / "s"
-    args = ["sweep", str(definition), "--store", str(store), "--workers", "2", "--no-progress"]
+    args = ["sweep", str(definition), "--store", str(store), "--workers", str(workers), "--no-progress"]
     cmd = [sys.executable, "-m", "slipchain", *args]
     start = cmd if stop_after is None else [*stopping(stop_after), *args]
     return cmd, store, subprocess.Popen(start, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -188,11 +188,11 @@ def _wait_stopped(proc) -> None:
     assert os.WIFSTOPPED(status), proc.communicate()
 
 
-def _interrupt_sweep(tmp_path, sig, after_members, stopping):
-    """Start `slipchain sweep` of 8 one-second members, send ``sig`` to the driver right after it has
-    stored ``after_members`` (it stops itself there), let it go on, then kill what is left of its
-    process group. Returns (command, store, return code, stdout)."""
-    cmd, store, proc = _slow_sweep(tmp_path, 8, stop_after=after_members, stopping=stopping)
+def _interrupt_sweep(tmp_path, sig, after_members, stopping, members=8, workers=2):
+    """Start `slipchain sweep` of ``members`` one-second members on ``workers`` processes, send ``sig``
+    to the driver right after it has stored ``after_members`` (it stops itself there), let it go on,
+    then kill what is left of its process group. Returns (command, store, return code, stdout)."""
+    cmd, store, proc = _slow_sweep(tmp_path, members, stop_after=after_members, stopping=stopping, workers=workers)
     try:
         _wait_stopped(proc)
         os.kill(proc.pid, sig)
@@ -208,7 +208,8 @@ def _interrupt_sweep(tmp_path, sig, after_members, stopping):
 
 
 def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path, cli_stopping_after_members):
-    cmd, store, code, _ = _interrupt_sweep(tmp_path, signal.SIGKILL, 2, cli_stopping_after_members)
+    # 4 members on 2 workers: when the driver is killed after storing 2, the other 2 are in flight or queued
+    cmd, store, code, _ = _interrupt_sweep(tmp_path, signal.SIGKILL, 2, cli_stopping_after_members, members=4)
     members = store / "members"
     assert code == -signal.SIGKILL
     survivors = sorted(p.stem for p in members.glob("*.nc"))
@@ -221,8 +222,8 @@ def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path, cli_s
     assert done.returncode == 0, done.stderr
     assert re.search(rf"skipped \(already in the store\)\s*│\s*{len(survivors)}\s*│", done.stdout), done.stdout
     log = Store.open(store).invocations()
-    assert log[-1]["skipped"] == len(survivors) and log[-1]["ran"] == 8 - len(survivors)
-    assert len(Store.open(store).completed_ids()) == 8
+    assert log[-1]["skipped"] == len(survivors) and log[-1]["ran"] == 4 - len(survivors)
+    assert len(Store.open(store).completed_ids()) == 4
     assert {mid: (members / f"{mid}.nc").stat().st_mtime_ns for mid in survivors} == mtimes  # not rewritten
 
 
@@ -257,8 +258,11 @@ def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path, cli_stopping_afte
 
 def test_sigterm_is_handled_as_ctrl_c_and_exits_143(tmp_path, cli_stopping_after_members):
     """Issue 30: a batch scheduler's SIGTERM at the wall-time limit (it ended the sweep silently,
-    exit 143 from the default action, without the store's index or log): now as Ctrl-C, with 143."""
-    cmd, store, code, out = _interrupt_sweep(tmp_path, signal.SIGTERM, 1, cli_stopping_after_members)
+    exit 143 from the default action, without the store's index or log): now as Ctrl-C, with 143.
+    (One worker: the driver's handling is the point, and each worker process compiles the engine
+    anew; Ctrl-C on two workers is test_ctrl_c_keeps_finished_members_and_exits_130.)"""
+    cmd, store, code, out = _interrupt_sweep(tmp_path, signal.SIGTERM, 1, cli_stopping_after_members, members=4,
+                                             workers=1)
     assert code == 143, out
     assert "(interrupted)" in out
     done = list((store / "members").glob("*.nc"))
@@ -267,7 +271,7 @@ def test_sigterm_is_handled_as_ctrl_c_and_exits_143(tmp_path, cli_stopping_after
     assert (store / "index.csv").exists() and not list(store.rglob("*.tmp"))
     again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)  # resumes: nothing lost
     assert again.returncode == 0, again.stderr
-    assert len(list((store / "members").glob("*.nc"))) == 8
+    assert len(list((store / "members").glob("*.nc"))) == 4
 
 
 def test_batched_tasks_store_the_same_members(tmp_path, client):
@@ -319,7 +323,8 @@ def test_ctrl_c_swallowed_in_a_finalizer_still_stops_the_sweep(tmp_path, client,
 
 def test_a_second_driver_on_the_same_store_is_refused_naming_the_holder(tmp_path, cli_stopping_after_members):
     # Before the driver lock, both drivers ran every member (and invocations.jsonl claimed both).
-    cmd, store, first = _slow_sweep(tmp_path, 6, stop_after=1, stopping=cli_stopping_after_members)
+    # (One worker: the lock is the driver's, and each worker process compiles the engine anew.)
+    cmd, store, first = _slow_sweep(tmp_path, 3, stop_after=1, stopping=cli_stopping_after_members, workers=1)
     try:
         _wait_stopped(first)  # it holds the lock, has stored one member, and waits
         second = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
@@ -336,7 +341,7 @@ def test_a_second_driver_on_the_same_store_is_refused_naming_the_holder(tmp_path
         except ProcessLookupError:
             pass
     log = Store.open(store).invocations()
-    assert len(log) == 1 and log[0]["ran"] == 6  # only the first driver ran, and it ran each member once
+    assert len(log) == 1 and log[0]["ran"] == 3  # only the first driver ran, and it ran each member once
     assert not (store / "driver.json").exists()  # released on a clean exit
 
 
