@@ -65,3 +65,25 @@ def test_rubber_figure_from_two_sweeps(tmp_path):
     r = _cli("figure", "rubber", "--store", str(elastic), "--elastic", str(rubber), "--out", str(tmp_path / "bad"))
     assert r.returncode == 2 and "material = 'elastic'; expected 'prony'" in r.stderr
     assert not (tmp_path / "bad").exists()
+
+
+def test_rubber_figure_with_one_drive_velocity_has_no_second_velocity_panel(tmp_path):
+    """A store with one drive velocity (presets/fig6-rubber-slab.toml) gives panels (a) and the load effect
+    only, not (a) twice: the figure is two panels wide, not three."""
+    import matplotlib.image as mpimg
+
+    from slipchain.analysis.rubber import rubber_drops
+    from slipchain.plots.rubber import plot_rubber
+
+    rows = [(var, T, 1e5, v, th, mu, 0.005, 2) for var, T, shift in (("elastic", np.nan, 0.0), ("prony 20 °C", 20.0, 0.05))
+            for v in (1e-3, 3e-4) for th, mu in ((0.05, 0.9 + shift), (1.0, 0.8 + shift))]
+    both = pd.DataFrame(rows, columns=["variant", "temperature", "eta_c", "v_d", "theta", "mu", "err", "n"])
+    one = both[np.isclose(both["v_d"], 1e-3)].reset_index(drop=True)
+    widths = []
+    for table, v_d2 in ((both, 3e-4), (one, 1e-3)):
+        attrs = {"v_d1": 1e-3, "v_d2": v_d2, "omega0": 1e6}
+        out = tmp_path / f"{len(table)}"
+        paths = plot_rubber(table, rubber_drops(table), attrs, out)
+        png = next(p for p in paths if p.suffix == ".png")
+        widths.append(mpimg.imread(png).shape[1])
+    assert widths[1] < 0.75 * widths[0]  # 9.3 in against 14 in

@@ -35,6 +35,8 @@ def rubber_table(rubber: xr.Dataset, elastic: xr.Dataset | None) -> pd.DataFrame
         t = seed_average(ds).to_dataframe().reset_index().dropna(subset=["mu"])
         if "eta_c" not in t:
             t["eta_c"] = cfg.eta_c
+        if "v_d" not in t:  # one drive velocity, in the base config (presets/fig6-rubber-slab.toml)
+            t["v_d"] = cfg.v_d
         if "temperature" not in t:
             t["temperature"] = cfg.temperature if cfg.material == "prony" else np.nan
         t["variant"] = [variant_name(cfg.material, x) for x in t["temperature"]]
@@ -71,7 +73,7 @@ def rubber_data(rubber: xr.Dataset, elastic: xr.Dataset | None) -> tuple[pd.Data
     table = rubber_table(rubber, elastic)
     v_d1, v_d2 = drive_velocities(cfg, np.unique(table["v_d"].values))
     bad = [not_completed(ds) for ds in (rubber, elastic) if ds is not None]
-    return table, rubber_drops(table), {"v_d1": v_d1, "v_d2": v_d2, "omega0": cfg.omega0,
+    return table, rubber_drops(table), {"v_d1": v_d1, "v_d2": v_d2, "omega0": cfg.omega0, "geometry": cfg.geometry,
                                         "not_completed": pd.concat(bad, ignore_index=True)}
 
 
@@ -86,9 +88,12 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     lines = ["# Fig. 6 with a viscoelastic slider (issue 28)", ""]
     if command:
         lines += [f"Command: `{command}`", ""]
-    lines += ["Seed means ± SE (seeds and time, `analysis.statistics.seed_average`). `elastic`: the paper's model "
-              "(springs at E = 10 MPa, pair damping eta = 0.3 omega0); `prony T`: the default (synthetic) compound at "
-              "temperature T, eta = 0 (docs/guide/viscoelastic.md). Same grid, step, start and run length.", "",
+    geometry = attrs.get("geometry", "chain")
+    elastic = ("the paper's model (springs at E = 10 MPa, pair damping eta = 0.3 omega0)" if geometry == "chain" else
+               f"the elastic body of geometry '{geometry}' (E = 10 MPa; the slab and half-space: radiation damping)")
+    lines += [f"Seed means ± SE (seeds and time, `analysis.statistics.seed_average`). `elastic`: {elastic}; "
+              "`prony T`: the default (synthetic) compound at temperature T, eta = 0 (docs/guide/viscoelastic.md). "
+              "Same grid, step, start and run length.", "",
               "## The load effect: mu_star(theta_max) / mu_star(theta_min)", "",
               "| v_d | eta_c / omega0 | theta | " + " | ".join(variants) + " |",
               "|---|---|---|" + "---|" * len(variants)]

@@ -70,12 +70,13 @@ def rubber(store: str | os.PathLike, out: str | os.PathLike, elastic: str | os.P
            command: str = "") -> list[Path]:
     """Fig. 6 with the viscoelastic slider (issue 28): the figure, report.md, table.csv (seed means) and
     drops.csv (the load effect per variant, eta_c and velocity) from a store of material = 'prony'
-    sweeping temperature, theta, eta_c and v_d, beside its elastic twin's store (``elastic``)."""
+    sweeping theta (and temperature, eta_c, v_d, or each in its base config), beside its elastic twin's
+    store (``elastic``)."""
     from ..analysis.rubber import report_markdown, rubber_data
     from ..plots.rubber import plot_rubber
     from ..results.io import write_text_atomic
 
-    need = {"theta", "v_d"}
+    need = {"theta"}
     rub = sweep_dataset(store, need, "the viscoelastic Fig. 6")
     ela = sweep_dataset(elastic, need, "the viscoelastic Fig. 6's elastic twin") if elastic is not None else None
     try:
