@@ -85,10 +85,11 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     """report.md: the load effect per variant, eta_c and velocity, then mu_star(theta) per variant."""
     v_d1, v_d2, w0 = attrs["v_d1"], attrs["v_d2"], attrs["omega0"]
     variants = list(dict.fromkeys(table["variant"]))
-    lines = ["# Fig. 6 with a viscoelastic slider (issue 28)", ""]
+    geometry = attrs.get("geometry", "chain")
+    where = "" if geometry == "chain" else f" on geometry '{geometry}'"
+    lines = [f"# Fig. 6 with a viscoelastic slider{where} (issue 28)", ""]
     if command:
         lines += [f"Command: `{command}`", ""]
-    geometry = attrs.get("geometry", "chain")
     elastic = ("the paper's model (springs at E = 10 MPa, pair damping eta = 0.3 omega0)" if geometry == "chain" else
                f"the elastic body of geometry '{geometry}' (E = 10 MPa; the slab and half-space: radiation damping)")
     lines += [f"Seed means ± SE (seeds and time, `analysis.statistics.seed_average`). `elastic`: {elastic}; "
