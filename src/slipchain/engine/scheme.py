@@ -66,7 +66,7 @@ A_WDRIVE, A_WDAMP, A_WCONTACT, A_WVISC = range(4)  # work by drive point, dampin
 N_ACC = 4
 BODY_ROWS = 4  # material 'prony': work rows of a row's body state after its 2 J internal fields (backends.viscoelastic)
 # material 'prony' on the slab under the drive springs: the top's rows after those (State.top; backends.viscoelastic):
-# Z_P, Z_S, J arms of channel P, J of S, and one row [drive force sum, step of the last solve]
+# Z_P, Z_S, J arms of channel P, J of S, and one row [drive force sum, step of the last solve], the body state's last
 
 
 def top_rows(J: int) -> int:

@@ -452,6 +452,12 @@ class Config(BaseModel):
         return self.K_d / self.a**2
 
     @property
+    def top_is_state(self) -> bool:
+        """The slab's top is a state of its own: material 'prony' on the slab under the drive springs (the
+        slab as a two-port per mode, model.elastic.slab_twoport; State.top, engine.backends.viscoelastic)."""
+        return self.material == "prony" and self.geometry == "slab" and self.dead_weight is None
+
+    @property
     def top_stiffness(self) -> float | None:
         """What holds the top of the slab [Pa/m]: the drive springs kappa_d, or None under the dead
         weight (the top is the rigid plate that carries the weight: clamped for every q != 0)."""

@@ -116,7 +116,7 @@ class State:
     xi: np.ndarray | None = None  # material 'prony': the Maxwell arms' fields (2 layers, J terms, n); None: zero
     # material 'prony' on the slab under the drive springs: the top's state (2 J + 3, n), rows Z_P, Z_S, the
     # top's arms (J of channel P, J of S), then [drive force sum, step of the top's last solve] (backends.viscoelastic,
-    # TOP_ROWS); None: the top in equilibrium with relaxed arms, solved at the first step
+    # scheme.top_rows); None: the top in equilibrium with relaxed arms, solved at the first step
     top: np.ndarray | None = None
 
     def copy(self) -> "State":

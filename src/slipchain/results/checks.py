@@ -31,7 +31,7 @@ def stored_energy(system: System, state: State) -> float:
     x, u, X, U = state.x, state.u, state.X, state.U
     drive = cfg.v_d * state.step * cfg.dt
     kinetic = 0.5 * cfg.m * np.sum(u * u) + 0.5 * cfg.upper_mass * np.sum(U * U)
-    if cfg.material == "prony" and cfg.geometry == "slab" and cfg.dead_weight is None:  # the top a state of its own
+    if cfg.top_is_state:  # the viscoelastic slab under the drive springs
         el, arms = top_energies(cfg, state)
         return float(kinetic + el + arms)
     if geometry_of(cfg).spectral:  # the quasi-static body: (1/2) sum (x - d) . (-F_el)
@@ -68,7 +68,7 @@ def arm_energy(system: System, state: State) -> float:
     if cfg.material != "prony" or state.xi is None:
         return 0.0
     r = np.asarray(cfg.prony_E) / cfg.E
-    if cfg.geometry == "slab" and cfg.dead_weight is None:
+    if cfg.top_is_state:
         return top_energies(cfg, state)[1]
     if geometry_of(cfg).spectral:  # xi relative to the plate (dead weight), U = (1/2) xi . a^2 k xi, k the arms' kernel
         from ..model.elastic import elastic_force

@@ -95,7 +95,7 @@ def batches(members: list[Member], size: int) -> list[list[Member]]:
         c = m.config
         groups.setdefault((c.N, c.Ly, c.geometry, c.dt, c.sample_steps, c.integrator == "adaptive",
                            c.integrator == "implicit", c.min_cycles > 0, c.material, len(c.prony_E or ()),
-                           c.material == "prony" and c.dead_weight is None), []).append(m)
+                           c.top_is_state), []).append(m)
     out = []
     for g in groups.values():
         out += [g[i:i + size] for i in range(0, len(g), size)]

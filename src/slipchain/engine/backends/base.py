@@ -121,8 +121,8 @@ class Batch:
         J = n_terms.pop()
         n = c0.n_blocks
         material = np.zeros((b, 2, J))
-        top = bool(J) and _has_top(c0)
-        if any(_has_top(s.config) != top for s in systems):
+        top = c0.top_is_state
+        if any(s.config.top_is_state != top for s in systems):
             raise ValueError("a batch of the viscoelastic slab is under the drive springs in all its rows or in none")
         bstate = np.zeros((b, 2 * J + S.BODY_ROWS + (S.top_rows(J) if top else 0) if J else 0, n))
         if J:
@@ -167,11 +167,6 @@ class Batch:
         top = self.bstate[row, 2 * J + S.BODY_ROWS:].copy() if self.twoport is not None else None
         return State(self.x[row].copy(), self.u[row].copy(), self.X[row].copy(), self.U[row].copy(), int(self.step[row]),
                      xi, top)
-
-
-def _has_top(cfg) -> bool:
-    """The slab's top is a state of its own: material 'prony' on the slab under the drive springs."""
-    return cfg.material == "prony" and cfg.geometry == "slab" and cfg.dead_weight is None
 
 
 def _kernels(systems: list[System]) -> np.ndarray | None:

@@ -510,7 +510,10 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
         return fft.irfft2(spec, s=(lx, ly), axes=(1, 2), overwrite_x=True).reshape(b, n)
 
     J = batch.material.shape[2] if batch.material is not None else 0
-    if J:  # material 'prony': the arms' force too, kept in work row 2J + 2 (.viscoelastic)
+    top = _TopDriver(batch, fft, acc) if batch.twoport is not None else None
+    if top is not None:  # the viscoelastic slab under the drive springs: its top solved between the steps
+        force = top.force  # noqa: F811
+    elif J:  # material 'prony': the arms' force too, kept in work row 2J + 2 (.viscoelastic)
         r = batch.material[:, 0, :]
         neg2 = np.concatenate([neg, arm_kernel(neg, batch.params[:, P_KD] == 0.0)])  # (the half-space: not k(0))
 
@@ -522,15 +525,8 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
             batch.bstate[:, 2 * J + 2] = both[b:]
             return both[:b] + both[b:]
 
-    top = _TopDriver(batch, fft, acc) if batch.twoport is not None else None
-    if top is not None:
-        force = top.force  # noqa: F811 - the viscoelastic slab under the drive springs
-
     adaptive, folds, control = _stepper_inputs(batch)
-    if top is not None:
-        step_rows = _loop("spectral-prony-top", adaptive)
-    else:
-        step_rows = loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name)
+    step_rows = loop(batch.geometry, "implicit" if batch.implicit else adaptive, batch.material_name, top is not None)
     ctl = np.zeros((b, N_CT), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, cmax)
@@ -794,14 +790,15 @@ def stepper(body: str, adaptive: bool | str):
     return adaptive_stepper(explicit, commit) if adaptive else fixed_stepper(explicit, commit, fastmath)
 
 
-def loop(geometry: str, adaptive: bool | str, material: str = "elastic"):
+def loop(geometry: str, adaptive: bool | str, material: str = "elastic", top: bool = False):
     """The compiled loop of one combination: for the chains the whole-chunk kernel
     (:func:`kernel_driver`), for the slab and half-space the per-step function of its FFT driver
     (:func:`rows_driver`). One per body and stepper, shared by the geometries of a body; integrators
     'fixed' and 'fold' share the fixed stepper (the fold-aware contact solve is the row's P_FOLD);
     the drive is the body's; ``material`` 'prony' the viscoelastic body of the chains or of the slab
-    under the dead weight (:mod:`.viscoelastic`)."""
-    body = BODIES[geometry] + ("-prony" if material == "prony" else "")
+    under the dead weight (:mod:`.viscoelastic`); ``top``: the slab's top a state of its own (material 'prony'
+    under the drive springs, Config.top_is_state: the body 'spectral-prony-top')."""
+    body = BODIES[geometry] + ("-prony" if material == "prony" else "") + ("-top" if top else "")
     return _loop(body, adaptive)
 
 

@@ -203,8 +203,7 @@ def slab_top_prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, da
         dampx[i] = d
     for i in range(n):
         Un[i] = Ur[i]
-    J = mt.shape[1]
-    return br[4 * J + BODY_ROWS + 2, 0]
+    return br[br.shape[0] - 1, 0]  # the body state's last row (scheme.top_rows)
 
 
 @nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -230,7 +229,7 @@ def top_solve(xh, gbh, Zh, Th, ft, tp, mt, bs, steps, params, wgt, fel, farm, wt
     b = xh.shape[0]
     nm = xh[0].size  # real and imaginary parts interleaved: every coefficient is real
     J = mt.shape[2]
-    meta = 4 * J + BODY_ROWS + 2
+    meta = bs.shape[1] - 1  # the body state's last row (scheme.top_rows)
     a = np.empty(J)
     cc = np.empty(J)
     gp = np.empty(nm)
@@ -280,9 +279,7 @@ def top_solve(xh, gbh, Zh, Th, ft, tp, mt, bs, steps, params, wgt, fel, farm, wt
                 rhs = kap * xd if c == 0 else 0.0  # the uniform mode's real part, entry 0
                 if relaxed:
                     for m in range(nm):
-                        zn = (-k12[m] * (x[m] + gb[m]) - d[m] * gp[m]) / (d[m] + kap)
-                        dz[m] = zn - z[m]
-                        z[m] = zn
+                        z[m] = (-k12[m] * (x[m] + gb[m]) - d[m] * gp[m]) / (d[m] + kap)
                     z[0] += rhs / (d[0] + kap)
                 else:
                     for m in range(nm):
