@@ -244,6 +244,38 @@ def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_pa
     assert refused.returncode == 2
     assert "different sweep definition" in refused.stderr and "theta" in refused.stderr
     assert len(list(Path(tmp_path / "s" / "members").glob("*.nc"))) == 2  # nothing mixed in
+    # ... but a new store can take over its finished members: theta = 0.5 is copied, 0.9 computed
+    bad = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "t"),
+                          "--reuse", str(tmp_path / "nowhere"), "--scheduler", addr], capture_output=True, text=True,
+                         timeout=120)
+    assert bad.returncode == 2 and "--reuse" in bad.stderr and "nowhere" in bad.stderr
+    assert not (tmp_path / "t").exists()  # refused before anything was written
+    grown = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "t"),
+                            "--reuse", str(tmp_path / "s"), "--scheduler", addr, "--no-progress"],
+                           capture_output=True, text=True, timeout=120)
+    assert grown.returncode == 0, grown.stderr
+    assert re.search(r"copied from --reuse stores\s*│\s*1\s*│", grown.stdout), grown.stdout
+    assert re.search(r"ran, completed\s*│\s*1\s*│", grown.stdout), grown.stdout
+
+
+def test_reuse_copies_only_finished_members_of_the_same_physics(tmp_path, client):
+    small = _sweep("a", theta=[0.5], seed=[0, 1])
+    assert run_sweep(small, tmp_path / "a", client=client, progress=False).ok
+    big = _sweep("b", theta=[0.5, 1.0], seed=[0, 1])
+    a_ids = [m.id for m in small.members]
+    assert set(a_ids) < {m.id for m in big.members}  # same config, same id
+    # a file of store a under the name of a member it never ran (theta = 1, seed 0): not taken
+    forged = big.members[[m.coords["theta"] for m in big.members].index(1.0)].id
+    (tmp_path / "a" / "members" / f"{forged}.nc").write_bytes((tmp_path / "a" / "members" / f"{a_ids[0]}.nc").read_bytes())
+    rep = run_sweep(big, tmp_path / "b", client=client, progress=False, reuse=[tmp_path / "a"])
+    assert rep.ok and sorted(rep.reused) == sorted(a_ids)
+    assert sorted(o.member.id for o in rep.ran) == sorted(m.id for m in big.members if m.id not in a_ids)
+    for mid in a_ids:  # the copies are the members, with this sweep's digest
+        a, b = (read_dataset(tmp_path / s / "members" / f"{mid}.nc") for s in "ab")
+        assert (a["f_d"].values == b["f_d"].values).all() and a.attrs["mu_star"] == b.attrs["mu_star"]
+        assert b.attrs["sweep_digest"] == big.digest != a.attrs["sweep_digest"]
+    assert (tmp_path / "a" / "members" / f"{forged}.nc").exists()  # the other store is only read
+    assert Store.open(tmp_path / "b").invocations()[-1]["reused"] == rep.reused
 
 
 def test_ctrl_c_keeps_finished_members_and_exits_130(tmp_path, cli_stopping_after_members):

@@ -34,16 +34,19 @@ def sweep(
         "(a killed task resumes from its checkpoint).")] = SWEEP_CHECKPOINT_EVERY,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the sweep file and the store, say what would run, "
                                           "and stop: nothing is computed or written.")] = False,
+    reuse: Annotated[Optional[list[Path]], typer.Option(
+        "--reuse", help="Another store (repeatable) whose completed members of this sweep (same id: the same full "
+        "config) are copied in instead of computed: extend a study in a new store.")] = None,
 ) -> None:
     """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
     definition = study_path(definition, "sweep file")
     if dry_run:
-        _dry_run(definition, store)
+        _dry_run(definition, store, reuse or [])
         return
     try:
         report = run_sweep(load_sweep_definition(definition), store, scheduler=scheduler, n_workers=workers,
                            progress=progress, backend=backend, batch_size=batch_size, checkpoint_every=checkpoint_every,
-                           announce=announce_dashboard(dashboard))
+                           announce=announce_dashboard(dashboard), reuse=reuse or ())
     except StoreWriteError as e:  # found while running (a full disk): what was stored is kept
         fail(str(e), code=1)
     except SweepError as e:
@@ -67,19 +70,24 @@ def presets() -> None:
     out.print(table)
 
 
-def _dry_run(definition: Path, store: Path) -> None:
+def _dry_run(definition: Path, store: Path, reuse: list[Path]) -> None:
     from ..engine.memory import estimate_bytes
-    from ..sweeps.store import Store
+    from ..sweeps.store import Store, reuse_source
 
     try:
         sw = load_sweep_definition(definition)
         st = Store.open(store, sw, create=False)
+        others = [reuse_source(p, store) for p in reuse]
     except SweepError as e:
         fail(str(e))
     done = st.completed_ids()
+    pending = {m.id for m in st.pending()}
+    copied = set().union(*(pending & {p.stem for p in (o / "members").glob("*.nc")} for o in others))
     largest = max(sw.members, key=lambda m: estimate_bytes(m.config))
     out.print(f"sweep {sw.name!r}: {len(sw.members)} members over {', '.join(sw.dims) or 'no dimension'}; "
-              f"{sum(m.id in done for m in sw.members)} already in {store}, {len(st.pending())} would run. "
+              f"{sum(m.id in done for m in sw.members)} already in {store}, "
+              + (f"{len(copied)} would be copied from --reuse, " if reuse else "")
+              + f"{len(pending) - len(copied)} would run. "
               f"Largest member: {largest.label()}, about {estimate_bytes(largest.config) / 2**20:,.0f} MiB. "
               "Dry run: nothing computed or written.", markup=False, highlight=False, soft_wrap=True)
 
@@ -95,7 +103,9 @@ def print_sweep_report(report: SweepReport, console: Console | None = None) -> N
     completed = [o for o in report.ran if o.status == Status.COMPLETED]
     table.add_row("ran, completed", str(len(completed)))
     table.add_row("ran, failed", str(len(report.failed)))
-    table.add_row("skipped (already in the store)", str(len(report.skipped)))
+    table.add_row("skipped (already in the store)", str(len(report.skipped) - len(report.reused)))
+    if report.reused:
+        table.add_row("copied from --reuse stores", str(len(report.reused)))
     if report.quarantined:
         table.add_row("quarantined (unreadable file, rerun)", str(len(report.quarantined)))
     table.add_row("not run" + (" (interrupted)" if report.interrupted else ""), str(report.not_run))

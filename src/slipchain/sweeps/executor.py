@@ -43,7 +43,7 @@ import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Callable, Iterator, Sequence
 
 import xarray as xr
 
@@ -58,7 +58,7 @@ from ..model.geometries import geometry_of
 from ..model.system import build_system
 from ..results.schema import Status
 from .definition import Member, SweepDefinition, SweepError
-from .store import Store
+from .store import Store, reuse_source
 
 ERROR = Status.ERROR.value
 GPU_BATCH = 256  # members per task with the GPU backend
@@ -146,6 +146,7 @@ class SweepReport:
     interrupted: bool = False
     notes: list[str] = field(default_factory=list)  # e.g. a stale driver lock taken over
     quarantined: list[tuple[str, str]] = field(default_factory=list)  # (member id, reason): unreadable files moved aside, rerun
+    reused: list[str] = field(default_factory=list)  # member ids copied from other stores (--reuse), also in skipped
     wall_time_s: float = 0.0
 
     @property
@@ -197,7 +198,8 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
               n_workers: int | None = None, client: object | None = None, progress: bool | None = None,
               backend: str | BackendName = BackendName.CPU, batch_size: int | None = None,
               checkpoint_every: float | None = SWEEP_CHECKPOINT_EVERY,
-              announce: Callable[[str], None] | None = None) -> SweepReport:
+              announce: Callable[[str], None] | None = None,
+              reuse: Sequence[str | os.PathLike] = ()) -> SweepReport:
     """Run the members of ``sweep`` that ``store`` does not hold yet; write each as it finishes.
 
     ``client``: an existing ``distributed.Client`` to use (tests); else ``scheduler`` (an
@@ -209,28 +211,34 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     different N or dt) advance at once, each on its own CUDA stream. ``checkpoint_every``: wall-clock
     seconds between the checkpoints of a running task (None: no checkpoints; see the module docstring).
     ``announce``: called with the Dask dashboard's address when this call starts a cluster or connects.
+    ``reuse``: other stores whose completed members of this sweep are copied in first instead of
+    being computed (:meth:`.Store.reuse_from`; the same id is the same physics).
     """
     threads = 1
     if backend == "gpu":  # one worker process owns the GPU; its threads run batches on separate streams
         batch_size = batch_size or GPU_BATCH
         n_workers = n_workers or 1
         threads = GPU_THREADS
+    for other in reuse:  # before the store is created: a wrong path writes nothing
+        reuse_source(other, store.path if isinstance(store, Store) else store)
     st = store if isinstance(store, Store) else Store.open(store, sweep)
     with st.driver_lock() as note:  # SweepError, naming the holder, if another driver runs this store
         return _run_locked(st, note, batch_size, client, scheduler, n_workers, threads, progress, backend,
-                           checkpoint_every, announce)
+                           checkpoint_every, announce, reuse)
 
 
 def _run_locked(st: Store, note: str | None, batch_size: int | None, client, scheduler: str | None,
                 n_workers: int | None, threads: int, progress: bool | None, backend: str,
-                checkpoint_every: float | None, announce: Callable[[str], None] | None = None) -> SweepReport:
+                checkpoint_every: float | None, announce: Callable[[str], None] | None = None,
+                reuse: Sequence[str | os.PathLike] = ()) -> SweepReport:
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     quarantined = st.check_members()  # unreadable member files: moved to quarantine/, their members rerun
+    reused = [mid for other in reuse for mid in st.reuse_from(other)]
     done = st.completed_ids()
     report = SweepReport(store=st.path, total=len(st.sweep.members),
                          skipped=[m for m in st.sweep.members if m.id in done], notes=[note] if note else [],
-                         quarantined=quarantined)
+                         quarantined=quarantined, reused=reused)
     pending = sorted(st.pending(), key=expected_cost, reverse=True)
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
@@ -248,7 +256,8 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
                            "interrupted": report.interrupted, "scheduler": scheduler or ("client" if client else "local"),
                            "n_workers": n_workers or (None if scheduler or client else default_workers()),
                            "backend": str(backend), "notes": report.notes,
-                           "quarantined": [mid for mid, _ in report.quarantined], "slipchain_version": __version__})
+                           "quarantined": [mid for mid, _ in report.quarantined], "reused": report.reused,
+                           "slipchain_version": __version__})
     return report
 
 

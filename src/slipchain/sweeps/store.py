@@ -45,7 +45,8 @@ from filelock import FileLock, Timeout
 
 from ..results.io import read_attrs, read_dataset, write_dataset, write_text_atomic
 from ..results.schema import SWEEP_VARIABLES, Status
-from .definition import Member, SweepDefinition, SweepError, load_sweep_definition
+from ..model.config import config_from_toml
+from .definition import Member, SweepDefinition, SweepError, load_sweep_definition, member_id
 
 DEFINITION = "sweep.toml"
 MEMBERS = "members"
@@ -152,6 +153,35 @@ class Store:
         else:
             path = write_dataset(ds, self.failed_path(member.id))
         return path
+
+    def reuse_from(self, other: str | os.PathLike) -> list[str]:
+        """Copy into this store the completed members of the store at ``other`` that this sweep has
+        and does not hold yet; returns their ids.
+
+        A member id is the hash of the member's full config (:func:`.definition.member_id`), so the
+        same id is the same physics: extending a study (a superset grid in a new store) reruns only
+        what is new. Each file is checked before it is taken: it must read, be completed, and carry
+        the config whose hash is its id. The copy is written like a finished member (atomically, with
+        this sweep's digest and coordinates); ``other`` is only read.
+        """
+        src = reuse_source(other, self.path)
+        done = self.completed_ids()
+        have = _ids_in(src / MEMBERS)
+        taken = []
+        for m in self.sweep.members:
+            if m.id in done or m.id not in have:
+                continue
+            path = src / MEMBERS / f"{m.id}.nc"
+            try:
+                ds = read_dataset(path)
+            except (OSError, ValueError, KeyError, RuntimeError):
+                continue  # unreadable there: this sweep computes it
+            if (ds.attrs.get("status") != Status.COMPLETED or ds.attrs.get("member_id") != m.id
+                    or member_id(config_from_toml(ds.attrs["config"])) != m.id):
+                continue
+            self.write_member(m, ds)
+            taken.append(m.id)
+        return taken
 
     def read_member(self, member: Member | str) -> xr.Dataset:
         mid = member if isinstance(member, str) else member.id
@@ -297,6 +327,17 @@ class Store:
             except json.JSONDecodeError:  # a line cut by a kill
                 continue
         return out
+
+
+def reuse_source(other: str | os.PathLike, store: str | os.PathLike) -> Path:
+    """``other`` as a store to reuse members from (``--reuse``), or SweepError naming what it is instead."""
+    src = Path(other)
+    if not (src / DEFINITION).exists():
+        raise SweepError(f"--reuse {str(src)!r} is not a slipchain sweep store (no {DEFINITION} in it); "
+                         "expected the --store directory of an earlier sweep")
+    if src.resolve() == Path(store).resolve():
+        raise SweepError(f"--reuse {str(src)!r} is the --store itself; expected another store")
+    return src
 
 
 def open_sweep(path: str | os.PathLike) -> xr.Dataset:
