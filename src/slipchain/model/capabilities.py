@@ -35,10 +35,6 @@ def refusal(geometry: str, integrator: str, drive: str, backend: str = "cpu", ma
     if drive == "dead_weight" and not _GEOMETRIES[geometry].top:
         return "a half-space has no top to carry the weight (use geometry = 'slab')"
     if material == "prony":
-        if geometry == "slab" and drive != "dead_weight" and integrator == "implicit":
-            return ("integrator = 'implicit' with material = 'prony' runs on the slab under the dead weight only in "
-                    "this version (under the drive springs the slab's top is a state of its own, which the "
-                    "backward-Euler system does not hold; give 'fold' or 'adaptive', or dead_weight)")
         if backend != "cpu":
             return "material = 'prony' runs on the CPU only in this version"
     if backend == "cpu":

@@ -570,7 +570,8 @@ class _TopDriver:
         self.wgt = np.repeat(parseval_weights(self.lx, self.ly), 2, axis=-1)  # (float views: .viscoelastic.top_solve)
         self.tp = np.repeat(batch.twoport, 2, axis=-1)
 
-    def _solve(self):
+    def solve(self):
+        """Solve every row's top whose last solve is older than its step (:func:`.viscoelastic.top_solve`)."""
         bt, fft = self.batch, self.fft
         b, n = bt.x.shape
         g = np.einsum("bj,bjn->bn", self.r, bt.bstate[:, :self.J])
@@ -582,7 +583,7 @@ class _TopDriver:
 
     def force(self) -> np.ndarray:
         b, n = self.batch.x.shape
-        self._solve()
+        self.solve()
         both = self.fft.irfft2(np.concatenate([self.fel, self.farm]), s=(self.lx, self.ly), axes=(1, 2),
                                overwrite_x=True).reshape(2 * b, n)
         self.batch.bstate[:, 2 * self.J + 2] = both[b:]
@@ -591,7 +592,7 @@ class _TopDriver:
     def close(self) -> None:
         bt = self.batch
         b, n = bt.x.shape
-        self._solve()
+        self.solve()
         spec = np.concatenate([self.Zh, self.Th.reshape(b, 2 * self.J, self.lx, -1)], axis=1)
         bt.bstate[:, self.t0:self.t0 + 2 + 2 * self.J] = self.fft.irfft2(
             spec, s=(self.lx, self.ly), axes=(2, 3)).reshape(b, 2 + 2 * self.J, n)
@@ -618,7 +619,9 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
     _, folds, control = _stepper_inputs(batch)
     # the explicit levels: the geometry's adaptive step, one row at a time (with 'prony' its level 0 alone:
     # Config.step_levels)
-    step_rows = _row_loop(BODIES[batch.geometry] + ("-prony" if prony else ""))
+    top = _TopDriver(batch, fft, acc) if batch.twoport is not None else None  # the slab's top a state of its own
+    step_rows = _row_loop(BODIES[batch.geometry] + ("-prony" if prony else "") + ("-top" if top is not None else ""))
+    wgt = parseval_weights(*batch.shape) if top is not None else None
     ctl = np.zeros((b, N_CT), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, batch.sites.shape[1])
@@ -635,7 +638,9 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
         p = batch.params[row]
         dead = p[P_KD] == 0.0  # the dead weight: the slab's body acts on x - X (the plate's displacement in every entry)
         arms = implicit.Arms(batch.material[row], batch.bstate[row]) if prony else None
-        if spectral_body:
+        if top is not None:
+            system = implicit.TopSlabSystem(p, batch.shape, fft, arms, top, row, batch.twoport[row], wgt)
+        elif spectral_body:
             op = implicit.SpectralOperator(batch.kernel[row], batch.shape, fft)
             system = implicit.SlabSystem(op, p, arms)
         else:
@@ -654,6 +659,8 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
             the arms' -L_c g (kept in work row 2J + 2, as :func:`fft_advance` does); the chains' none."""
             if not spectral_body:
                 return no_force
+            if top is not None:  # the top solved at this step (none if it is current), its force on the blocks
+                return top.force()[r]
             if not prony:
                 return -op.apply(xr - Xr if dead else xr)[None, :]
             g = arms.now()[0]
@@ -681,6 +688,8 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                     continue
                 h = dt0 * w
                 t1 = (batch.step[row] + w) * dt0
+                if top is not None:  # the top current at the step's start (after explicit steps)
+                    top.solve()
                 its, n_cg = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra,
                                                    rk, ap, cr[CT_HAVE] > 0)
                 spent += KRYLOV_TRY_UNITS + abs(its) + n_cg
@@ -700,6 +709,8 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 spent = 0.0
                 implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, ra, rk, uk, fk, ca, slow, w)
                 commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+                if top is not None:
+                    system.commit_top(batch.step[row] + w, batch.bstate[row])
                 acc[row, A_WCONTACT] -= w_contact
                 acc[row, A_WDAMP] += w_damp
                 acc[row, A_WDRIVE] += w_drive
@@ -718,6 +729,8 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
             if batch.status[row] >= 0:
                 break
         carry[row, N_CARRY:] = ap
+    if top is not None:
+        top.close()
     return ChunkOutput(out, acc, cacc)
 
 

@@ -733,6 +733,129 @@ class SlabSystem:
         return -float(np.dot(self.arm_part(self.op.apply(gb), gb) + sb * self.arm_part(lw1, w1), w1)) * h
 
 
+class TopSlabSystem(SlabSystem):
+    """Backward Euler on a row of the viscoelastic slab under the drive springs (material 'prony'),
+    whose top is a massless state of its own (:mod:`.viscoelastic`, the two-port of
+    :func:`slipchain.model.elastic.slab_twoport`; ``top`` the chunk's :class:`.compose._TopDriver`,
+    holding the top's fields Z_c and arms xi_cj in Fourier space, solved at the step's start).
+
+    Per mode and channel c (weights W_c; entries A, K12c, K22c; kappa the drive springs) the top at the
+    step's end is the explicit steps' solve (:func:`.viscoelastic.top_solve`) with the blocks' state at
+    the step's end, Y' = x' + g_b' = (x + G) + (h + S) u' (the bottom's arms as :class:`Arms`), and
+    s = S/h (the top's arms advanced by the same exponential rule over the step)::
+
+        D_c Z_c' = kappa X_d' [c = P, q = 0] - K12c Y' - K22c (G_c - s Z_c),   D_c = K22c (1 + s) + kappa,
+
+    G_c = sum_j r_j a_j xi_cj. Eliminated, the blocks feel the force -(K_eff Y' + B), Fourier-diagonal,
+
+        K_eff = A - sum_c W_c (1 + s) K12c**2 / D_c,
+        B = sum_c W_c K12c [(1 + s) kappa X_d' [c = P, q = 0] + kappa (G_c - s Z_c)] / D_c,
+
+    so the step's matrix is the spring-driven slab's with L -> IFFT[K_eff] and h**2 -> h (h + S)
+    (without arms, K_eff is the slab in series with the springs and B the drive: the elastic slab's
+    own system). The balance takes the energy of slab and springs as the two-port's quadratic form
+    (:func:`slipchain.results.checks.top_energies`) and the arms' work on blocks and top over the step
+    at its constant velocities (:meth:`Arms.mean`), and keeps the top's end state; :meth:`commit_top`
+    writes it into the driver after the step is accepted (so the next solve finds it current and
+    adds no work of its own)."""
+
+    def __init__(self, p, shape, fft, arms: Arms, top, row: int, twoport: np.ndarray, wgt: np.ndarray):
+        self.p = p
+        self.shape = shape
+        self.fft = fft
+        self.n = shape[0] * shape[1]
+        self.dead = False
+        self.size = self.n
+        self.arms = arms
+        self.top = top
+        self.row = row
+        self.A = twoport[0]
+        self.W = np.stack([twoport[1], 1.0 - twoport[1]])
+        self.K12, self.K22 = twoport[2:4], twoport[4:6]
+        self.kap = p[P_KD]
+        self.wgt = wgt
+
+    def _fourier(self, v):
+        return self.fft.rfft2(v.reshape(self.shape))
+
+    def setup(self, xr, ur, Xr, Ur, h, t1):
+        p, n, arms = self.p, self.n, self.arms
+        m, meta, kap = p[P_M], p[P_META], self.kap
+        self.h = h
+        self.S = arms.setup(h)
+        self.hs = h + self.S
+        s = self.S / h
+        self.D = self.K22 * (1.0 + s) + kap
+        keff = self.A - np.sum(self.W * (1.0 + s) * self.K12 ** 2 / self.D, axis=0)
+        self.op = SpectralOperator(keff, self.shape, self.fft)
+        self.cdiag = m + h * meta
+        a = np.exp(-h / arms.tau)
+        self.cc = -arms.tau * np.expm1(-h / arms.tau) / h
+        th = self.top.Th[self.row]  # (2, J, Lx, Lh)
+        self.Z0 = self.top.Zh[self.row].copy()
+        self.Gc = np.einsum("j,cjxy->cxy", arms.r * a, th)
+        self.Gbar_c = np.einsum("j,cjxy->cxy", arms.r * self.cc, th)  # the top's arms' mean over the step (Arms.mean)
+        self.xd1 = n * p[P_VD] * t1
+        bh = np.sum(self.W * self.K12 * kap * (self.Gc - s * self.Z0) / self.D, axis=0)
+        bh[0, 0] += self.W[0, 0, 0] * self.K12[0, 0, 0] * (1.0 + s) * kap * self.xd1 / self.D[0, 0, 0]
+        b = self.fft.irfft2(bh, s=self.shape).reshape(n)
+        self.diag = self.cdiag + h * self.hs * self.op.lii
+        rhs = m * ur + h * meta * p[P_VD] - h * self.op.apply(xr + arms.G[0]) - h * b
+        return rhs, ur.copy()
+
+    def matvec(self, v):
+        return self.cdiag * v + self.h * self.hs * self.op.apply(v)
+
+    def _top_end(self, yh):
+        """The top's fields at the step's end from the transform of Y' (the class docstring)."""
+        s = self.S / self.h
+        z = (-self.K12 * yh - self.K22 * (self.Gc - s * self.Z0))
+        z[0, 0, 0] += self.kap * self.xd1
+        return z / self.D
+
+    def _energy(self, xh, Z, xd):
+        """The slab's and the drive springs' energy (:func:`slipchain.results.checks.top_energies`)."""
+        A, W, K12, K22, kap = self.A, self.W, self.K12, self.K22, self.kap
+        el = A * abs(xh) ** 2 + np.sum(W * (2 * K12 * (np.conj(xh) * Z).real + (K22 + kap) * abs(Z) ** 2), axis=0)
+        el[0, 0] += kap * (abs(Z[0, 0, 0] - xd) ** 2 - abs(Z[0, 0, 0]) ** 2)
+        return 0.5 * float(np.sum(self.wgt * el))
+
+    def balance(self, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs):
+        p, n, arms = self.p, self.n, self.arms
+        m, meta, vd, kap = p[P_M], p[P_META], p[P_VD], self.kap
+        t0 = t1 - h
+        x1 = xr + h * un
+        xh0, xh1 = self._fourier(xr), self._fourier(x1)
+        self.Z1 = self._top_end(self._fourier(x1 + arms.G[0] + self.S * un))
+        xd0 = n * vd * t0
+        e0 = 0.5 * m * float(np.dot(ur, ur)) + self._energy(xh0, self.Z0, xd0)
+        e1 = 0.5 * m * float(np.dot(un, un)) + self._energy(xh1, self.Z1, self.xd1)
+        self.fd1 = kap * (self.xd1 - float(self.Z1[0, 0, 0].real))
+        fsum = 0.5 * (kap * (xd0 - float(self.Z0[0, 0, 0].real)) + self.fd1)
+        w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
+        # the arms' work on blocks and top at the step's constant velocities u', (Z' - Z)/h (Arms.mean)
+        (gb, _), sb = arms.mean(h)
+        zdot = (self.Z1 - self.Z0) / h
+        uh, gh = self._fourier(un), self._fourier(gb + sb * un)
+        gt = self.Gbar_c + sb * zdot
+        power = (np.conj(uh) * (self.A * gh + np.sum(self.W * self.K12 * gt, axis=0))
+                 + np.sum(self.W * np.conj(zdot) * (self.K12 * gh + self.K22 * gt), axis=0)).real
+        w_visc = -h * float(np.sum(self.wgt * power))
+        return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un, w_visc)
+
+    def commit_top(self, step: int, bs: np.ndarray):
+        """After the accepted step: the top's fields and arms at its end into the driver, its solve
+        marked current at ``step`` (the body state's last row, scheme.top_rows) with the drive force sum."""
+        z0, row = self.Z0, self.row
+        th = self.top.Th[row]
+        a = np.exp(-self.h / self.arms.tau)
+        th *= a[None, :, None, None]
+        th += self.cc[None, :, None, None] * (self.Z1 - z0)[:, None]
+        self.top.Zh[row] = self.Z1
+        bs[-1, 0] = self.fd1
+        bs[-1, 1] = step
+
+
 def lattice_terms(ly, K, KL, KT, Kd, KY, KLY, meta, a, b, fa, fb, da, db):
     """The springs' forces (fa, fb) and the pair dampers' (da, db) of the fields (a, b) on the two
     layers of the chain2d lattice, as :func:`.scheme.block_update_2d` has them (the drive springs'
@@ -925,6 +1048,6 @@ def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol,
     return -1, cg_its[0]
 
 
-__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "Y_MAX", "be_contacts", "be_try", "be_try_arms", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
+__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "TopSlabSystem", "Y_MAX", "be_contacts", "be_try", "be_try_arms", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
            "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
            "step_balance"]
