@@ -16,7 +16,7 @@ from slipchain import run
 from slipchain.results.io import read_dataset
 from slipchain.sweeps.executor import run_sweep
 from slipchain.sweeps.store import Store
-from slipchain.sweeps.definition import make_sweep
+from slipchain.sweeps.definition import SweepError, make_sweep
 
 # Contacts all above v_d (no stick-slip), steady start: a member completes in well under a second.
 # The fixed step: the kill tests need members of a known cost (the adaptive default is ~10x faster here).
@@ -250,12 +250,32 @@ def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_pa
                          timeout=120)
     assert bad.returncode == 2 and "--reuse" in bad.stderr and "nowhere" in bad.stderr
     assert not (tmp_path / "t").exists()  # refused before anything was written
+    for only in ("theta", "theta=0.7"):  # malformed, or not a coordinate: exit 2, nothing written
+        bad = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "t"),
+                              "--only", only, "--scheduler", addr], capture_output=True, text=True, timeout=120)
+        assert bad.returncode == 2 and "--only" in bad.stderr and not (tmp_path / "t").exists(), bad.stderr
     grown = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "t"),
                             "--reuse", str(tmp_path / "s"), "--scheduler", addr, "--no-progress"],
                            capture_output=True, text=True, timeout=120)
     assert grown.returncode == 0, grown.stderr
     assert re.search(r"copied from --reuse stores\s*│\s*1\s*│", grown.stdout), grown.stdout
     assert re.search(r"ran, completed\s*│\s*1\s*│", grown.stdout), grown.stdout
+
+
+def test_only_runs_the_selected_members_and_leaves_the_rest_pending(tmp_path, client):
+    sw = _sweep("o", theta=[0.5, 1.0], seed=[0, 1])
+    with pytest.raises(SweepError, match="'v_d' is not a dimension"):
+        run_sweep(sw, tmp_path / "bad", client=client, progress=False, only={"v_d": ["1e-3"]})
+    with pytest.raises(SweepError, match="not a value of dimension 'theta'"):
+        run_sweep(sw, tmp_path / "bad", client=client, progress=False, only={"theta": ["0.7"]})
+    assert not (tmp_path / "bad").exists()  # refused before the store was created
+    rep = run_sweep(sw, tmp_path / "s", client=client, progress=False, only={"theta": ["1"]})
+    picked = sorted(m.id for m in sw.members if m.coords["theta"] == 1.0)
+    assert sorted(o.member.id for o in rep.ran) == picked and rep.deselected == 2 and rep.ok
+    ds = Store.open(tmp_path / "s").dataset()
+    assert list(ds["status"].sel(theta=0.5).values) == ["missing", "missing"]
+    rest = run_sweep(sw, tmp_path / "s", client=client, progress=False)  # the rest later: the whole sweep
+    assert len(rest.skipped) == 2 and len(rest.ran) == 2 and rest.deselected == 0 and rest.ok
 
 
 def test_reuse_copies_only_finished_members_of_the_same_physics(tmp_path, client):

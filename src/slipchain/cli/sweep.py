@@ -37,14 +37,18 @@ def sweep(
     reuse: Annotated[Optional[list[Path]], typer.Option(
         "--reuse", help="Another store (repeatable) whose completed members of this sweep (same id: the same full "
         "config) are copied in instead of computed: extend a study in a new store.")] = None,
+    only: Annotated[Optional[list[str]], typer.Option(
+        "--only", help="KEY=VALUE (repeatable): run only the members at these sweep coordinates now (one key "
+        "given twice: either value); the others stay pending for a later call.")] = None,
 ) -> None:
     """Run every member of a sweep on Dask, writing each to the store as it finishes; resumes."""
     definition = study_path(definition, "sweep file")
+    selection = _only(only or [])
     if dry_run:
-        _dry_run(definition, store, reuse or [])
+        _dry_run(definition, store, reuse or [], selection)
         return
     try:
-        report = run_sweep(load_sweep_definition(definition), store, scheduler=scheduler, n_workers=workers,
+        report = run_sweep(load_sweep_definition(definition), store, only=selection, scheduler=scheduler, n_workers=workers,
                            progress=progress, backend=backend, batch_size=batch_size, checkpoint_every=checkpoint_every,
                            announce=announce_dashboard(dashboard), reuse=reuse or ())
     except StoreWriteError as e:  # found while running (a full disk): what was stored is kept
@@ -53,6 +57,17 @@ def sweep(
         fail(str(e))
     print_sweep_report(report)
     raise typer.Exit(sweep_exit(report))
+
+
+def _only(items: list[str]) -> dict[str, list[str]]:
+    """``--only KEY=VALUE`` options as {key: [values]}; a malformed one exits 2 naming it."""
+    out_: dict[str, list[str]] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            fail(f"--only {item!r}: expected KEY=VALUE with KEY a sweep dimension (e.g. --only v_d=1e-3)")
+        out_.setdefault(key.strip(), []).append(value.strip())
+    return out_
 
 
 def presets() -> None:
@@ -70,7 +85,7 @@ def presets() -> None:
     out.print(table)
 
 
-def _dry_run(definition: Path, store: Path, reuse: list[Path]) -> None:
+def _dry_run(definition: Path, store: Path, reuse: list[Path], only: dict[str, list[str]]) -> None:
     from ..engine.memory import estimate_bytes
     from ..sweeps.store import Store, reuse_source
 
@@ -78,16 +93,24 @@ def _dry_run(definition: Path, store: Path, reuse: list[Path]) -> None:
         sw = load_sweep_definition(definition)
         st = Store.open(store, sw, create=False)
         others = [reuse_source(p, store) for p in reuse]
+        selected = sw.selection(only)
     except SweepError as e:
         fail(str(e))
     done = st.completed_ids()
     pending = {m.id for m in st.pending()}
     copied = set().union(*(pending & {p.stem for p in (o / "members").glob("*.nc")} for o in others))
+    pending -= copied  # --reuse copies every member it can, selected or not
+    left = 0
+    if selected is not None:
+        left = len(pending - selected)
+        pending &= selected
     largest = max(sw.members, key=lambda m: estimate_bytes(m.config))
     out.print(f"sweep {sw.name!r}: {len(sw.members)} members over {', '.join(sw.dims) or 'no dimension'}; "
               f"{sum(m.id in done for m in sw.members)} already in {store}, "
               + (f"{len(copied)} would be copied from --reuse, " if reuse else "")
-              + f"{len(pending) - len(copied)} would run. "
+              + f"{len(pending)} would run"
+              + (f" ({left} pending outside --only left for later). " if selected is not None else ". ")
+              + 
               f"Largest member: {largest.label()}, about {estimate_bytes(largest.config) / 2**20:,.0f} MiB. "
               "Dry run: nothing computed or written.", markup=False, highlight=False, soft_wrap=True)
 
@@ -108,6 +131,8 @@ def print_sweep_report(report: SweepReport, console: Console | None = None) -> N
         table.add_row("copied from --reuse stores", str(len(report.reused)))
     if report.quarantined:
         table.add_row("quarantined (unreadable file, rerun)", str(len(report.quarantined)))
+    if report.deselected:
+        table.add_row("left pending (outside --only)", str(report.deselected))
     table.add_row("not run" + (" (interrupted)" if report.interrupted else ""), str(report.not_run))
     table.add_row("total", str(report.total))
     table.add_row("wall time", f"{report.wall_time_s:.1f} s")

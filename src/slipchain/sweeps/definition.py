@@ -43,6 +43,8 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, Mapping
 
+import numpy as np
+
 from ..model.config import OFF, Config, ConfigError, make_config, read_toml
 from .catalogue import preset_files
 
@@ -76,6 +78,16 @@ class Member:
 # while off, so stores written before the option existed stay valid.
 OPTIONAL_FEATURES = ("dead_weight", "top_mass", "p_theta1", "t_decide", "t_ramp", "prony_E", "prony_tau", "temperature", "T_ref", "wlf_C1",
                      "wlf_C2")  # absent (None): left out of the hashed text
+
+
+def _same_value(coord: Any, value: Any) -> bool:
+    """A sweep coordinate equals a value given on the command line (numbers to 1e-9, relative)."""
+    if isinstance(coord, (int, float)) and not isinstance(coord, bool):
+        try:
+            return bool(np.isclose(float(coord), float(value), rtol=1e-9, atol=0.0))
+        except (TypeError, ValueError):
+            return False
+    return str(coord) == str(value)
 
 
 def member_id(config: Config) -> str:
@@ -124,6 +136,29 @@ class SweepDefinition:
                 mid = member_id(cfg)
                 seen.setdefault(mid, Member(point, cfg, mid))
         return list(seen.values())
+
+    def selection(self, only: Mapping[str, Any] | None) -> set[str] | None:
+        """The ids of the members at the given coordinates (``{dimension: [values, ...]}``; values may
+        be the text of a number: any value of a dimension, every dimension given; ``slipchain sweep
+        --only``), or None for all. Refuses (SweepError) a key that is not a dimension and a value
+        that is not one of its coordinates, naming what is allowed."""
+        if not only:
+            return None
+        want = {}
+        for key, values in only.items():
+            if key not in self.dims:
+                raise SweepError(f"--only {key}=...: {key!r} is not a dimension of sweep {self.name!r}; "
+                                 f"expected one of {list(self.dims)}")
+            coords = self.coords[key]
+            picked = []
+            for v in values:
+                match = [c for c in coords if _same_value(c, v)]
+                if not match:
+                    raise SweepError(f"--only {key}={v}: not a value of dimension {key!r}; expected one of "
+                                     f"{[f'{c:g}' if isinstance(c, float) else c for c in coords]}")
+                picked += match
+            want[key] = picked
+        return {m.id for m in self.members if all(any(_same_value(m.coords[k], v) for v in vs) for k, vs in want.items())}
 
     @cached_property
     def digest(self) -> str:

@@ -43,7 +43,7 @@ import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterator, Sequence
+from typing import Callable, Iterator, Mapping, Sequence
 
 import xarray as xr
 
@@ -147,6 +147,7 @@ class SweepReport:
     notes: list[str] = field(default_factory=list)  # e.g. a stale driver lock taken over
     quarantined: list[tuple[str, str]] = field(default_factory=list)  # (member id, reason): unreadable files moved aside, rerun
     reused: list[str] = field(default_factory=list)  # member ids copied from other stores (--reuse), also in skipped
+    deselected: int = 0  # pending members outside --only: left for a later invocation, not a failure
     wall_time_s: float = 0.0
 
     @property
@@ -155,7 +156,7 @@ class SweepReport:
 
     @property
     def not_run(self) -> int:
-        return self.total - len(self.skipped) - len(self.ran)
+        return self.total - len(self.skipped) - len(self.ran) - self.deselected
 
     @property
     def ok(self) -> bool:
@@ -199,7 +200,7 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
               backend: str | BackendName = BackendName.CPU, batch_size: int | None = None,
               checkpoint_every: float | None = SWEEP_CHECKPOINT_EVERY,
               announce: Callable[[str], None] | None = None,
-              reuse: Sequence[str | os.PathLike] = ()) -> SweepReport:
+              reuse: Sequence[str | os.PathLike] = (), only: Mapping[str, Sequence] | None = None) -> SweepReport:
     """Run the members of ``sweep`` that ``store`` does not hold yet; write each as it finishes.
 
     ``client``: an existing ``distributed.Client`` to use (tests); else ``scheduler`` (an
@@ -212,7 +213,9 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
     seconds between the checkpoints of a running task (None: no checkpoints; see the module docstring).
     ``announce``: called with the Dask dashboard's address when this call starts a cluster or connects.
     ``reuse``: other stores whose completed members of this sweep are copied in first instead of
-    being computed (:meth:`.Store.reuse_from`; the same id is the same physics).
+    being computed (:meth:`.Store.reuse_from`; the same id is the same physics). ``only``: run only
+    the pending members at these coordinates (``{dimension: [values]}``, :meth:`.SweepDefinition.selection`;
+    the rest stay pending for a later invocation, counted as ``deselected``, not as failed).
     """
     threads = 1
     if backend == "gpu":  # one worker process owns the GPU; its threads run batches on separate streams
@@ -221,16 +224,17 @@ def run_sweep(sweep: SweepDefinition, store: str | os.PathLike | Store, *, sched
         threads = GPU_THREADS
     for other in reuse:  # before the store is created: a wrong path writes nothing
         reuse_source(other, store.path if isinstance(store, Store) else store)
+    selected = sweep.selection(only)  # likewise: SweepError for a key or value the sweep does not have
     st = store if isinstance(store, Store) else Store.open(store, sweep)
     with st.driver_lock() as note:  # SweepError, naming the holder, if another driver runs this store
         return _run_locked(st, note, batch_size, client, scheduler, n_workers, threads, progress, backend,
-                           checkpoint_every, announce, reuse)
+                           checkpoint_every, announce, reuse, selected)
 
 
 def _run_locked(st: Store, note: str | None, batch_size: int | None, client, scheduler: str | None,
                 n_workers: int | None, threads: int, progress: bool | None, backend: str,
                 checkpoint_every: float | None, announce: Callable[[str], None] | None = None,
-                reuse: Sequence[str | os.PathLike] = ()) -> SweepReport:
+                reuse: Sequence[str | os.PathLike] = (), selected: set[str] | None = None) -> SweepReport:
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     quarantined = st.check_members()  # unreadable member files: moved to quarantine/, their members rerun
@@ -240,6 +244,9 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
                          skipped=[m for m in st.sweep.members if m.id in done], notes=[note] if note else [],
                          quarantined=quarantined, reused=reused)
     pending = sorted(st.pending(), key=expected_cost, reverse=True)
+    if selected is not None:  # --only: the others wait for a later invocation
+        report.deselected = sum(m.id not in selected for m in pending)
+        pending = [m for m in pending if m.id in selected]
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
         with _interrupt_flag():
@@ -256,7 +263,7 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
                            "interrupted": report.interrupted, "scheduler": scheduler or ("client" if client else "local"),
                            "n_workers": n_workers or (None if scheduler or client else default_workers()),
                            "backend": str(backend), "notes": report.notes,
-                           "quarantined": [mid for mid, _ in report.quarantined], "reused": report.reused,
+                           "quarantined": [mid for mid, _ in report.quarantined], "reused": report.reused, "deselected": report.deselected,
                            "slipchain_version": __version__})
     return report
 
