@@ -40,6 +40,8 @@ CATALOGUE: dict[str, Study] = {
                      "Fig. 6 on a 2-D interface: the 2-D chains and an elastic slab"),
     "fig6-3d-eps1": Study("study", 16, "13 min", "docs/fig6-3d-eps1/index.md",
                           "Fig. 6 on a 64 x 64 slab at the physical contact stiffness, epsilon = 1 (implicit)"),
+    "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
+                                 "fig6-3d-eps1 in rubber at v_d1: the 64 x 64 rubber slab at epsilon = 1 (implicit)"),
     "fig6-rubber": Study("study", 144, "10 min", "docs/fig6-rubber/index.md",
                          "Fig. 6 with a viscoelastic slider (Prony bulk) at 20 and 11 °C"),
     "fig6-rubber-elastic": Study("study", 72, "25 s", "docs/fig6-rubber/index.md",
