@@ -31,8 +31,9 @@ def _cli(*args):
     return subprocess.run([sys.executable, "-m", "slipchain", *args], capture_output=True, text=True)
 
 
-def _sweep(tmp_path, name, material, temperature):
-    (tmp_path / f"{name}.toml").write_text(f'name = "{name}"\n' + BASE.format(material=material, temperature=temperature))
+def _sweep(tmp_path, name, material, temperature, v_d="[0.1, 0.05]"):
+    text = BASE.format(material=material, temperature=temperature).replace("[0.1, 0.05]", v_d)
+    (tmp_path / f"{name}.toml").write_text(f'name = "{name}"\n' + text)
     # one worker: each worker process compiles the kernels anew, and the members are tiny (the
     # sweep on several workers is tests/workflows/test_runner.py's)
     r = _cli("sweep", str(tmp_path / f"{name}.toml"), "--store", str(tmp_path / name), "--workers", "1", "--no-progress")
@@ -42,7 +43,7 @@ def _sweep(tmp_path, name, material, temperature):
 
 def test_rubber_figure_from_two_sweeps(tmp_path):
     rubber = _sweep(tmp_path, "rubber", 'material = "prony"', "temperature = [20.0, 11.0]\n")
-    elastic = _sweep(tmp_path, "elastic", "", "")
+    elastic = _sweep(tmp_path, "elastic", "", "", v_d="[0.1, 0.05, 0.2]")  # a twin that swept one velocity more
     out = tmp_path / "fig"
     r = _cli("figure", "rubber", "--store", str(rubber), "--elastic", str(elastic), "--out", str(out))
     assert r.returncode == 0, r.stderr
@@ -50,7 +51,8 @@ def test_rubber_figure_from_two_sweeps(tmp_path):
     table = pd.read_csv(out / "table.csv")
     drops = pd.read_csv(out / "drops.csv")
     assert set(table["variant"]) == {"elastic", "prony 20 °C", "prony 11 °C"}
-    assert len(table) == 12 and (table["n"] == 2).all()
+    assert len(table) == 12 and (table["n"] == 2).all()  # the twin where the rubber has data: not at v_d = 0.2
+    assert not np.isclose(table["v_d"], 0.2).any() and not np.isclose(drops["v_d"], 0.2).any()
     # each drop is the ratio of the table's seed means at the largest and smallest theta
     for _, d in drops.iterrows():
         rows = table[(table["variant"] == d["variant"]) & np.isclose(table["v_d"], d["v_d"])].sort_values("theta")

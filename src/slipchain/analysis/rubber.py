@@ -26,7 +26,8 @@ def variant_name(material: str, temperature: float | None) -> str:
 
 def rubber_table(rubber: xr.Dataset, elastic: xr.Dataset | None) -> pd.DataFrame:
     """Seed-averaged mu_star, one row per (variant, eta_c, v_d, theta) with data: columns variant,
-    temperature (NaN for the elastic), eta_c, v_d, theta, mu, err, n."""
+    temperature (NaN for the elastic), eta_c, v_d, theta, mu, err, n. The elastic twin's rows only at
+    the (v_d, eta_c) the rubber has (a twin such as presets/fig6-3d-eps1.toml may sweep more)."""
     frames = []
     for ds in (rubber, elastic):
         if ds is None:
@@ -41,6 +42,12 @@ def rubber_table(rubber: xr.Dataset, elastic: xr.Dataset | None) -> pd.DataFrame
             t["temperature"] = cfg.temperature if cfg.material == "prony" else np.nan
         t["variant"] = [variant_name(cfg.material, x) for x in t["temperature"]]
         frames.append(t)
+    if len(frames) == 2:  # the twin where the rubber has data: its velocities and dampings (a twin store may hold more)
+        rub, el = frames
+        keep = np.zeros(len(el), dtype=bool)
+        for v, ec in {(v, ec) for v, ec in zip(rub["v_d"], rub["eta_c"])}:
+            keep |= np.isclose(el["v_d"], v) & np.isclose(el["eta_c"], ec)
+        frames[1] = el[keep]
     table = pd.concat(frames, ignore_index=True)
     table["n"] = table["n"].astype(int)
     table = table.sort_values(["temperature", "eta_c", "v_d", "theta"], ascending=[False, False, False, True],
