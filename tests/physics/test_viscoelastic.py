@@ -17,6 +17,7 @@ import pytest
 from slipchain.engine.backends import viscoelastic as ve
 from slipchain.engine.scheme import BODY_ROWS
 from slipchain.engine.simulate import run, simulate
+from slipchain.model.capabilities import refusal
 from slipchain.model.config import Config, ConfigError, make_config
 from slipchain.model.stability import chain_modes, prony_amplification
 from slipchain.model.system import State, build_system
@@ -181,8 +182,9 @@ def test_default_compound_and_temperature_shift():
     with pytest.raises(ConfigError, match="'temperature' .*WLF's range"):
         make_config(material="prony", temperature=20.0 - c.C2 - 1.0)
     make_config(material="prony", geometry="slab", N=8, Ly=8)  # the spring drive: the top a state of its own
-    with pytest.raises(ConfigError, match="runs on the slab under the dead weight only"):
-        make_config(material="prony", geometry="slab", N=8, Ly=8, integrator="implicit")  # not in backward Euler
+    # ... also in backward Euler (implicit.TopSlabSystem; tests/physics/test_implicit.py), but on the CPU only
+    assert make_config(material="prony", geometry="slab", N=8, Ly=8, integrator="implicit").top_is_state
+    assert refusal("slab", "implicit", "spring", "gpu", "prony") == "material = 'prony' runs on the CPU only in this version"
     make_config(material="prony", geometry="halfspace", N=8, Ly=8)  # the half-space's k(q != 0) is the rubber's
     # the adaptive step runs, below fold's accuracy bound 0.1/omega0 and at its own tolerance
     ad = make_config(material="prony", integrator="adaptive")
