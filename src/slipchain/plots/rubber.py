@@ -59,6 +59,7 @@ def plot_rubber(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, out: str |
     ax.axhline(0.8, color="0.4", ls="--", lw=1)
     ax.axhline(1.0, color="0.7", lw=0.8)
     ax.set_xticks(xs, labels, fontsize=7)
+    ax.set_xlim(min(xs) - 0.7, max(xs) + 0.7)  # room for the dampings' offsets at the ends
     ax.set_ylabel(r"$\mu^*(\theta_{max}) / \mu^*(\theta_{min})$")
     ax.set_title(f"({'bc'[len(speeds) - 1]}) the load effect (0.8: the paper's 20 %)")
     fig.tight_layout()
