@@ -81,7 +81,7 @@ def rubber_data(rubber: xr.Dataset, elastic: xr.Dataset | None) -> tuple[pd.Data
     v_d1, v_d2 = drive_velocities(cfg, np.unique(table["v_d"].values))
     bad = [not_completed(ds) for ds in (rubber, elastic) if ds is not None]
     return table, rubber_drops(table), {"v_d1": v_d1, "v_d2": v_d2, "omega0": cfg.omega0, "geometry": cfg.geometry,
-                                        "not_completed": pd.concat(bad, ignore_index=True)}
+                                        "epsilon": cfg.epsilon, "not_completed": pd.concat(bad, ignore_index=True)}
 
 
 def _fmt(mu: float, err: float) -> str:
@@ -94,6 +94,8 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     variants = list(dict.fromkeys(table["variant"]))
     geometry = attrs.get("geometry", "chain")
     where = "" if geometry == "chain" else f" on geometry '{geometry}'"
+    eps = attrs.get("epsilon", 1e-2)
+    where += "" if eps == 1e-2 else f", epsilon = {eps:g}"  # the paper's epsilon unsaid (every page has its own title)
     lines = [f"# Fig. 6 with a viscoelastic slider{where} (issue 28)", ""]
     if command:
         lines += [f"Command: `{command}`", ""]
