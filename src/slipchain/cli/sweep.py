@@ -98,19 +98,17 @@ def _dry_run(definition: Path, store: Path, reuse: list[Path], only: dict[str, l
         fail(str(e))
     done = st.completed_ids()
     pending = {m.id for m in st.pending()}
-    copied = set().union(*(pending & {p.stem for p in (o / "members").glob("*.nc")} for o in others))
+    copied = set().union(*(pending & Store.open(o).completed_ids() for o in others))
     pending -= copied  # --reuse copies every member it can, selected or not
     left = 0
     if selected is not None:
         left = len(pending - selected)
         pending &= selected
     largest = max(sw.members, key=lambda m: estimate_bytes(m.config))
+    copies = f"{len(copied)} would be copied from --reuse, " if reuse else ""
+    later = f" ({left} pending outside --only left for later)" if selected is not None else ""
     out.print(f"sweep {sw.name!r}: {len(sw.members)} members over {', '.join(sw.dims) or 'no dimension'}; "
-              f"{sum(m.id in done for m in sw.members)} already in {store}, "
-              + (f"{len(copied)} would be copied from --reuse, " if reuse else "")
-              + f"{len(pending)} would run"
-              + (f" ({left} pending outside --only left for later). " if selected is not None else ". ")
-              + 
+              f"{sum(m.id in done for m in sw.members)} already in {store}, {copies}{len(pending)} would run{later}. "
               f"Largest member: {largest.label()}, about {estimate_bytes(largest.config) / 2**20:,.0f} MiB. "
               "Dry run: nothing computed or written.", markup=False, highlight=False, soft_wrap=True)
 

@@ -258,6 +258,21 @@ def twoport_kernel(cfg) -> np.ndarray:
     return np.stack([a2 * A, wp, a2 * k12p, a2 * k12s, a2 * dp, a2 * ds])
 
 
+def twoport_energy(tp: np.ndarray, kappa: float, xh: np.ndarray, Z: np.ndarray, xd: float, wgt: np.ndarray) -> float:
+    """The elastic energy of the slab under the drive springs, its top a state of its own [J]: per mode and
+    channel c, with W_c = w_c**2 (:func:`twoport_kernel`'s ``tp``; the top's displacement is w_c Z_c),
+
+        1/2 [A |x|^2 + sum_c W_c (2 K12c Re(x* Z_c) + (K22c + kappa) |Z_c|^2)]   (uniform mode: kappa |Z_P - X_d|^2)
+
+    summed with Parseval's weights ``wgt``; ``xh`` the blocks' transform, ``Z`` (2, ...) the top's, ``xd``
+    the drive's displacement times the number of blocks (the uniform mode of its transform)."""
+    A, W = tp[0], np.stack([tp[1], 1.0 - tp[1]])
+    K12, K22 = tp[2:4], tp[4:6]
+    el = A * abs(xh) ** 2 + np.sum(W * (2 * K12 * (np.conj(xh) * Z).real + (K22 + kappa) * abs(Z) ** 2), axis=0)
+    el[0, 0] += kappa * (abs(Z[0, 0, 0] - xd) ** 2 - abs(Z[0, 0, 0]) ** 2)
+    return float(0.5 * np.sum(wgt * el))
+
+
 def parseval_weights(Lx: int, Ly: int) -> np.ndarray:
     """w on the rfft2 grid with sum_r f g = sum_q w Re(F conj G) for real (Lx, Ly) fields f, g of
     transforms F, G: 2/n on the columns that stand for two of the full grid, 1/n on ky = 0 (and on
@@ -290,4 +305,4 @@ def elastic_force(u: np.ndarray, X: float | np.ndarray, k_half: np.ndarray, a: f
     return -(a * a) * fft.irfft2(k_half * fft.rfft2(d), s=d.shape)
 
 
-__all__ = ["QH_HALFSPACE", "k_psv_twoport_bvp", "parseval_weights", "slab_twoport", "twoport_kernel", "config_kernel", "elastic_force", "elastic_kernel", "uniform_stiffness", "interface_kernel", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]
+__all__ = ["QH_HALFSPACE", "k_psv_twoport_bvp", "parseval_weights", "slab_twoport", "twoport_energy", "twoport_kernel", "config_kernel", "elastic_force", "elastic_kernel", "uniform_stiffness", "interface_kernel", "wavenumbers", "halfspace_kernel", "k_halfspace", "k_psv", "k_psv_bvp", "k_sh", "slab_kernel"]

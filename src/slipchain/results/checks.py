@@ -92,7 +92,7 @@ def top_energies(cfg, state: State) -> tuple[float, float]:
 
     summed with Parseval's weights. A state without the top's (``state.top`` None: a run's start) has
     its top in the relaxed equilibrium, as the first step puts it."""
-    from ..model.elastic import parseval_weights, twoport_kernel
+    from ..model.elastic import parseval_weights, twoport_energy, twoport_kernel
 
     tp = twoport_kernel(cfg)
     A, W = tp[0], np.stack([tp[1], 1.0 - tp[1]])
@@ -114,13 +114,11 @@ def top_energies(cfg, state: State) -> tuple[float, float]:
         rhs = np.zeros((2,) + xh.shape, complex)
         rhs[0, 0, 0] = kap * xd
         Z = (rhs - K12 * ub) / (K22 + kap)
-    el = A * abs(xh) ** 2 + np.sum(W * (2 * K12 * (np.conj(xh) * Z).real + (K22 + kap) * abs(Z) ** 2), axis=0)
-    el[0, 0] += kap * (abs(Z[0, 0, 0] - xd) ** 2 - abs(Z[0, 0, 0]) ** 2)
     arms = 0.0
     for j in range(J):
         q = A * abs(xib[j]) ** 2 + np.sum(W * (2 * K12 * (np.conj(xib[j]) * xit[:, j]).real + K22 * abs(xit[:, j]) ** 2), axis=0)
         arms += r[j] * np.sum(wgt * q)
-    return float(0.5 * np.sum(wgt * el)), float(0.5 * arms)
+    return twoport_energy(tp, kap, xh, Z, xd, wgt), float(0.5 * arms)
 
 
 @dataclass(frozen=True)

@@ -567,7 +567,8 @@ class _TopDriver:
         self.fel = np.zeros_like(spec[:, 0])
         self.farm = np.zeros_like(self.fel)
         self.wtop = np.zeros(b)
-        self.wgt = np.repeat(parseval_weights(self.lx, self.ly), 2, axis=-1)  # (float views: .viscoelastic.top_solve)
+        self.weights = parseval_weights(self.lx, self.ly)
+        self.wgt = np.repeat(self.weights, 2, axis=-1)  # (float views: .viscoelastic.top_solve)
         self.tp = np.repeat(batch.twoport, 2, axis=-1)
 
     def solve(self):
@@ -621,7 +622,6 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
     # Config.step_levels)
     top = _TopDriver(batch, fft, acc) if batch.twoport is not None else None  # the slab's top a state of its own
     step_rows = _row_loop(BODIES[batch.geometry] + ("-prony" if prony else "") + ("-top" if top is not None else ""))
-    wgt = parseval_weights(*batch.shape) if top is not None else None
     ctl = np.zeros((b, N_CT), dtype=np.int64)
     aprev = np.zeros((b, 2 * n))
     scratch = scratch_arrays(n, batch.sites.shape[1])
@@ -639,7 +639,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
         dead = p[P_KD] == 0.0  # the dead weight: the slab's body acts on x - X (the plate's displacement in every entry)
         arms = implicit.Arms(batch.material[row], batch.bstate[row]) if prony else None
         if top is not None:
-            system = implicit.TopSlabSystem(p, batch.shape, fft, arms, top, row, batch.twoport[row], wgt)
+            system = implicit.TopSlabSystem(p, arms, top, row)
         elif spectral_body:
             op = implicit.SpectralOperator(batch.kernel[row], batch.shape, fft)
             system = implicit.SlabSystem(op, p, arms)
@@ -688,8 +688,8 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                     continue
                 h = dt0 * w
                 t1 = (batch.step[row] + w) * dt0
-                if top is not None:  # the top current at the step's start (after explicit steps)
-                    top.solve()
+                if top is not None and batch.bstate[row, -1, 1] != batch.step[row]:  # the top current at the step's
+                    top.solve()  # start (after explicit steps; a solve at the step of the last one changes nothing)
                 its, n_cg = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra,
                                                    rk, ap, cr[CT_HAVE] > 0)
                 spent += KRYLOV_TRY_UNITS + abs(its) + n_cg

@@ -72,6 +72,7 @@ import math
 import numba as nb
 import numpy as np
 
+from ...model.elastic import twoport_energy
 from .cpu import scaled_exp
 from .viscoelastic import bulk_forces, combined_fields
 from ..scheme import (FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_M, P_META, P_ML, P_VD,
@@ -574,9 +575,9 @@ class Arms:
         self.br = br
 
     def setup(self, h):
-        """S and G (both layers) for a step h."""
-        a = np.exp(-h / self.tau)
-        c = -self.tau * np.expm1(-h / self.tau)
+        """S and G (both layers) for a step h; keeps the step's a_j and c_j (``a``, ``c``)."""
+        self.a = a = np.exp(-h / self.tau)
+        self.c = c = -self.tau * np.expm1(-h / self.tau)
         self.S = float(np.dot(self.r, c))
         J = self.J
         self.G = (np.dot(self.r * a, self.br[:J]), np.dot(self.r * a, self.br[J:2 * J]))
@@ -754,26 +755,26 @@ class TopSlabSystem(SlabSystem):
     so the step's matrix is the spring-driven slab's with L -> IFFT[K_eff] and h**2 -> h (h + S)
     (without arms, K_eff is the slab in series with the springs and B the drive: the elastic slab's
     own system). The balance takes the energy of slab and springs as the two-port's quadratic form
-    (:func:`slipchain.results.checks.top_energies`) and the arms' work on blocks and top over the step
+    (:func:`slipchain.model.elastic.twoport_energy`) and the arms' work on blocks and top over the step
     at its constant velocities (:meth:`Arms.mean`), and keeps the top's end state; :meth:`commit_top`
     writes it into the driver after the step is accepted (so the next solve finds it current and
     adds no work of its own)."""
 
-    def __init__(self, p, shape, fft, arms: Arms, top, row: int, twoport: np.ndarray, wgt: np.ndarray):
+    def __init__(self, p, arms: Arms, top, row: int):
         self.p = p
-        self.shape = shape
-        self.fft = fft
-        self.n = shape[0] * shape[1]
+        self.shape = top.batch.shape
+        self.fft = top.fft
+        self.n = self.shape[0] * self.shape[1]
         self.dead = False
         self.size = self.n
         self.arms = arms
         self.top = top
         self.row = row
-        self.A = twoport[0]
-        self.W = np.stack([twoport[1], 1.0 - twoport[1]])
-        self.K12, self.K22 = twoport[2:4], twoport[4:6]
+        self.tp = tp = top.batch.twoport[row]
+        self.A = tp[0]
+        self.W = np.stack([tp[1], 1.0 - tp[1]])
+        self.K12, self.K22 = tp[2:4], tp[4:6]
         self.kap = p[P_KD]
-        self.wgt = wgt
 
     def _fourier(self, v):
         return self.fft.rfft2(v.reshape(self.shape))
@@ -789,11 +790,10 @@ class TopSlabSystem(SlabSystem):
         keff = self.A - np.sum(self.W * (1.0 + s) * self.K12 ** 2 / self.D, axis=0)
         self.op = SpectralOperator(keff, self.shape, self.fft)
         self.cdiag = m + h * meta
-        a = np.exp(-h / arms.tau)
-        self.cc = -arms.tau * np.expm1(-h / arms.tau) / h
+        self.cc = arms.c / h
         th = self.top.Th[self.row]  # (2, J, Lx, Lh)
         self.Z0 = self.top.Zh[self.row].copy()
-        self.Gc = np.einsum("j,cjxy->cxy", arms.r * a, th)
+        self.Gc = np.einsum("j,cjxy->cxy", arms.r * arms.a, th)
         self.Gbar_c = np.einsum("j,cjxy->cxy", arms.r * self.cc, th)  # the top's arms' mean over the step (Arms.mean)
         self.xd1 = n * p[P_VD] * t1
         bh = np.sum(self.W * self.K12 * kap * (self.Gc - s * self.Z0) / self.D, axis=0)
@@ -814,11 +814,8 @@ class TopSlabSystem(SlabSystem):
         return z / self.D
 
     def _energy(self, xh, Z, xd):
-        """The slab's and the drive springs' energy (:func:`slipchain.results.checks.top_energies`)."""
-        A, W, K12, K22, kap = self.A, self.W, self.K12, self.K22, self.kap
-        el = A * abs(xh) ** 2 + np.sum(W * (2 * K12 * (np.conj(xh) * Z).real + (K22 + kap) * abs(Z) ** 2), axis=0)
-        el[0, 0] += kap * (abs(Z[0, 0, 0] - xd) ** 2 - abs(Z[0, 0, 0]) ** 2)
-        return 0.5 * float(np.sum(self.wgt * el))
+        """The slab's and the drive springs' energy (:func:`slipchain.model.elastic.twoport_energy`)."""
+        return twoport_energy(self.tp, self.kap, xh, Z, xd, self.top.weights)
 
     def balance(self, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs):
         p, n, arms = self.p, self.n, self.arms
@@ -840,7 +837,7 @@ class TopSlabSystem(SlabSystem):
         gt = self.Gbar_c + sb * zdot
         power = (np.conj(uh) * (self.A * gh + np.sum(self.W * self.K12 * gt, axis=0))
                  + np.sum(self.W * np.conj(zdot) * (self.K12 * gh + self.K22 * gt), axis=0)).real
-        w_visc = -h * float(np.sum(self.wgt * power))
+        w_visc = -h * float(np.sum(self.top.weights * power))
         return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un, w_visc)
 
     def commit_top(self, step: int, bs: np.ndarray):
@@ -848,8 +845,7 @@ class TopSlabSystem(SlabSystem):
         marked current at ``step`` (the body state's last row, scheme.top_rows) with the drive force sum."""
         z0, row = self.Z0, self.row
         th = self.top.Th[row]
-        a = np.exp(-self.h / self.arms.tau)
-        th *= a[None, :, None, None]
+        th *= self.arms.a[None, :, None, None]
         th += self.cc[None, :, None, None] * (self.Z1 - z0)[:, None]
         self.top.Zh[row] = self.Z1
         bs[-1, 0] = self.fd1
