@@ -1,18 +1,21 @@
 #!/bin/bash
 # A sweep on the lent device machine's CPUs (issue 29: 16 cores beside this project's 2). Run there by
 # the device tool from the repository root, with the wheels the image lacks carried in .whl
-# (docs/guide/gpu.md). Usage: benchmarks/device_sweep.sh SWEEP SECONDS [WORKERS]
-# The sweep stops (SIGINT, as Ctrl-C: finished members are kept) after SECONDS; the store comes back
-# as a tarball in $OUT, split into parts of 15 MiB (the device returns at most 8 files of 16 MiB each:
-# a 15-member rubber store of 21.8 MB did not come back whole). Here: cat store.tgz.* | tar xz
+# (docs/guide/gpu.md). Usage: benchmarks/device_sweep.sh SWEEP SECONDS [WORKERS [SWEEP OPTIONS...]]
+# e.g. benchmarks/device_sweep.sh fig6-rubber-slab 540 13 --only temperature=11 --only v_d=3e-4
+# The sweep stops (SIGINT, as Ctrl-C: finished members are kept, and a running member's last checkpoint,
+# STORE/checkpoints, which a later `slipchain sweep` on the same store resumes) after SECONDS; the store
+# comes back as a tarball in $OUT, split into parts of 15 MiB (the device returns at most 8 files of
+# 16 MiB each, 64 MiB in all: a 15-member rubber store of 21.8 MB did not come back whole). Here:
+# cat store.tgz.* | tar xz. Machine, versions and the sweep's start and end times go to machine.txt.
 set -u
-sweep=$1; limit=$2; workers=${3:-$(nproc)}
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 3
+sweep=$1; limit=$2; workers=${3:-$(nproc)}; shift $(( $# < 3 ? $# : 3 ))
+[ -d /tmp/site/numpy ] || python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 3
 export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1 NUMBA_CACHE_DIR=/tmp/numba-cache
 out=${OUT:-/tmp/out}; mkdir -p "$out"
 { nproc; lscpu | grep -E "Model name|Thread|Socket|^CPU\(s\)"; python3 -c "import numpy, numba, scipy, xarray, dask, pydantic; print('numpy', numpy.__version__, 'numba', numba.__version__, 'scipy', scipy.__version__)"; } | tee "$out/machine.txt"
-date +%s > "$out/t0"
-timeout -s INT -k 30 "$limit" python3 -m slipchain sweep "$sweep" --store /tmp/store --workers "$workers" --no-progress 2>&1 | tee "$out/sweep.log"
-date +%s > "$out/t1"
+echo "sweep start $(date +%s)" >> "$out/machine.txt"
+timeout -s INT -k 30 "$limit" python3 -m slipchain sweep "$sweep" --store /tmp/store --workers "$workers" --no-progress "$@" 2>&1 | tee "$out/sweep.log"
+echo "sweep end $(date +%s)" >> "$out/machine.txt"
 tar czf - -C /tmp store | split -b 15M -d -a 1 - "$out/store.tgz."
 ls -la "$out"
