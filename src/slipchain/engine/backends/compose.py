@@ -58,6 +58,7 @@ from ..scheme import (A_WCONTACT, BODY_ROWS, A_WDAMP, A_WDRIVE, A_WVISC, FASTMAT
 from . import implicit, spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
+from ..jitcache import COMPILE_EACH_PROCESS, stable_cache
 from .base import N_CARRY, Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice_commit, lattice_explicit, row_parameters
 
@@ -90,6 +91,7 @@ def fixed_stepper(explicit, commit, fastmath: bool):
     the body's loop flags (``fastmath``: the slab's loop was)."""
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
+    @stable_cache
     @nb.njit(cache=True, inline="always", **flags)
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
              scratch):
@@ -113,6 +115,7 @@ def fixed_sample(explicit, commit, fastmath: bool):
     Returns (base steps, sum of f_d contributions, the four works)."""
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
+    @stable_cache
     @nb.njit(cache=True, **flags)
     def sample(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, nstep, sample_steps, rc,
                scratch, wc, wd, wdr, wv):
@@ -141,6 +144,7 @@ def step_sample(stepper):
     steppers: each step takes one or more base steps), from the sample's start. Arguments and
     returns as :func:`fixed_sample`."""
 
+    @stable_cache
     @nb.njit(cache=True)
     def sample(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, nstep, sample_steps, rc,
                scratch, wc, wd, wdr, wv):
@@ -167,6 +171,7 @@ def adaptive_stepper(explicit, commit):
     step's time grid, the error from consecutive accelerations, rejection and restore), composed
     with a body."""
 
+    @stable_cache
     @nb.njit(cache=True, inline="always")
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
              scratch):
@@ -311,6 +316,7 @@ def implicit_stepper(explicit, commit, prony: bool = False):
     commit_be = viscoelastic.prony_be_commit if prony else commit
     be_try = implicit.be_try_arms if prony else implicit.be_try
 
+    @stable_cache
     @nb.njit(cache=True, inline="always")
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
              scratch):
@@ -355,6 +361,8 @@ def implicit_stepper(explicit, commit, prony: bool = False):
             commit_be(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
             return w, fsum / n * w, w_contact, w_damp, w_drive, w_visc
 
+    if not prony:  # its loops loaded from the cache give other last bits than compiled (jitcache.stable_cache)
+        setattr(step, COMPILE_EACH_PROCESS, True)
     return step
 
 
@@ -402,6 +410,7 @@ def kernel_driver(sample):
     ``sample`` (:func:`fixed_sample`, :func:`step_sample`) (a body that needs nothing from outside the
     kernel: the chains)."""
 
+    @stable_cache
     @nb.njit(cache=True)
     def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
                 carry, n_samples, sample_steps, out, acc, cacc, status):
@@ -462,6 +471,7 @@ def rows_driver(stepper, fastmath: bool):
     (it is inlined here)."""
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
+    @stable_cache
     @nb.njit(cache=True, **flags)
     def step_rows(F, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
                   ctl, aprev, cacc, acc, fd, sample_steps, status, scratch):
