@@ -85,3 +85,33 @@ def test_engine_stays_bounded_just_inside_and_blows_up_just_outside(case):
     assert end <= 3.0 * start  # bounded (the modes are damped; symplectic Euler's energy error is bounded)
     start, end = _spread(outside)
     assert end > 1e6 * start  # a mode grows by more than 1.0001 per step (or the state went non-finite)
+
+
+def test_trbdf2_is_second_order_l_stable_and_dissipates_far_less_than_backward_euler():
+    """stability.trbdf2_amplification (the analysis of a less dissipative implicit step, issue 27): on the
+    chain's modes (springs and pair damping together) its error against the exact propagator expm(h J) is
+    third order per step (halving h divides it by ~8); every mode decays for steps from 1e-9 s to 10 s
+    (A-stable) and the radius falls like 1/h far above the modes' time scales (L-stable); on an undamped
+    resolved mode it keeps the energy to ~7.35e-3 (h omega)^4 per step where backward Euler loses (h omega)^2."""
+    from scipy.linalg import expm
+
+    from slipchain.model.stability import be_amplification, chain_modes, trbdf2_amplification
+
+    cfg = make_config(N=31)
+    B, D = chain_modes(cfg.N, cfg.Ly, cfg.m, cfg.N_L, cfg.K, cfg.K_L, cfg.K_T, cfg.K_d, cfg.K_Y, cfg.K_LY, cfg.eta)
+    k = 7
+    d = B.shape[1]
+    J = np.block([[np.zeros((d, d)), np.eye(d)], [-B[k], -D[k]]])
+    omega = np.sqrt(np.abs(np.linalg.eigvals(B[k])).max())
+    errors = [np.abs(trbdf2_amplification(B[k:k + 1], D[k:k + 1], h)[0] - expm(h * J)).max()
+              for h in (0.02 / omega, 0.01 / omega)]
+    assert 7.0 < errors[0] / errors[1] < 9.0
+    radii = [np.abs(np.linalg.eigvals(trbdf2_amplification(B, D, h))).max() for h in np.logspace(-9, 1, 21)]
+    assert max(radii) < 1.0
+    assert radii[-1] < 1e-4 and 8.0 < radii[-3] / radii[-1] < 12.0  # ~ 1/h: ten times the step, a tenth
+    w = np.array([[[1.0]]])
+    for hw in (0.05, 0.1, 0.2):
+        kept = np.abs(np.linalg.eigvals(trbdf2_amplification(w, 0.0 * w, hw)[0])).max() ** 2
+        kept_be = np.abs(np.linalg.eigvals(be_amplification(w, 0.0 * w, hw)[0])).max() ** 2
+        assert 1.0 - kept == pytest.approx(7.35e-3 * hw ** 4, rel=0.1)
+        assert 1.0 - kept_be == pytest.approx(hw ** 2, rel=0.05)

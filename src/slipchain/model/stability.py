@@ -123,6 +123,38 @@ def be_amplification(B: np.ndarray, D: np.ndarray, h: float) -> np.ndarray:
     return A
 
 
+TRBDF2_GAMMA = 2.0 - math.sqrt(2.0)  # TR-BDF2's stage fraction: L-stable, and both stages share one matrix form
+
+
+def trbdf2_amplification(B: np.ndarray, D: np.ndarray, h: float, gamma: float = TRBDF2_GAMMA) -> np.ndarray:
+    """TR-BDF2's amplification matrices (modes, 2d, 2d) in (x, v) for the linear part
+    y' = J y, J = [[0, I], [-B, -D]] (Bank et al. 1985; Hosea and Shampine 1996): a trapezoidal stage
+    to t + gamma h, then BDF2 through t, t + gamma h, t + h::
+
+        (I - gamma h/2 J) y_g = (I + gamma h/2 J) y_n
+        (I - (1 - gamma)/(2 - gamma) h J) y_1 = y_g / (gamma (2 - gamma)) - (1 - gamma)^2 / (gamma (2 - gamma)) y_n
+
+    Each stage is a backward-Euler-like solve (the implicit stepper's, with a shifted base state and
+    step gamma h/2 or (1 - gamma)/(2 - gamma) h), so the stepper's Newton-Krylov solve would serve both.
+    Second order, A-stable and, with gamma = 2 - sqrt(2), L-stable (radius ~ 4.8/(h omega) as h -> inf).
+    Its numerical dissipation on a resolved undamped mode is ~7e-3 (h omega)^4 of the energy per step,
+    against (h omega)^2 for backward Euler (:func:`be_amplification`); on motion linear in time (creep)
+    the trapezoidal stage is exact. Analysis for the issue-27 question of a less dissipative implicit
+    step (docs/numerics.md, "The implicit stepper"); no stepper uses it yet."""
+    n, d, _ = B.shape
+    eye = np.broadcast_to(np.eye(2 * d), (n, 2 * d, 2 * d))
+    J = np.zeros((n, 2 * d, 2 * d))
+    J[:, :d, d:] = np.eye(d)
+    J[:, d:, :d] = -B
+    J[:, d:, d:] = -D
+    c1 = 0.5 * gamma * h
+    c2 = (1.0 - gamma) / (2.0 - gamma) * h
+    w1 = 1.0 / (gamma * (2.0 - gamma))
+    w0 = (1.0 - gamma) ** 2 / (gamma * (2.0 - gamma))
+    stage = np.linalg.solve(eye - c1 * J, eye + c1 * J)
+    return np.linalg.solve(eye - c2 * J, w1 * stage - w0 * eye)
+
+
 def largest_stable_step(B: np.ndarray, D: np.ndarray, rel: float = 1e-10) -> float:
     """The largest h with spectral radius <= 1 + RADIUS_TOL, by doubling then bisection to ``rel``.
 
@@ -284,5 +316,5 @@ def slab_modes(cfg) -> tuple[np.ndarray, np.ndarray]:
     return w2[:, None, None], np.full((w2.size, 1, 1), cfg.radiation_damping_rate)
 
 
-__all__ = ["RADIUS_TOL", "amplification", "prony_amplification", "prony_stable_step", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
+__all__ = ["RADIUS_TOL", "TRBDF2_GAMMA", "trbdf2_amplification", "amplification", "prony_amplification", "prony_stable_step", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
            "slab_modes", "spectral_radius", "stable_step"]
