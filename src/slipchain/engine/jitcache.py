@@ -13,8 +13,12 @@ own closure; plain values (numbers, strings, flags) by ``repr``; and the content
 :mod:`slipchain.engine` and :mod:`slipchain.model`, the modules whose functions a composed loop inlines.
 So an edit in any of those modules invalidates the composed loops' cache entries, which numba's own
 check (the defining file's time stamp) would not see. A closure holding anything else keeps numba's key
-(it is then compiled in each process, as before). The cached machine code is the code the process would
-have compiled: results are the same to the bit (tests/physics/test_jitcache.py)."""
+(it is then compiled in each process, as before). Every loop so cached gives the same bits loaded as
+compiled (``benchmarks/jitcache_bits.py``: all 18 loops; tests/physics/test_jitcache.py); the one loop that
+did not is compiled in each process (:data:`COMPILE_EACH_PROCESS`, :func:`stable_cache`).
+
+This leans on two numba internals, ``Dispatcher._cache`` and ``FunctionCache._index_key`` (numba 0.68, the
+version requirements.lock pins); a numba that changes them makes the test above fail, not the results."""
 
 from __future__ import annotations
 

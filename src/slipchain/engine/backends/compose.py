@@ -55,10 +55,10 @@ from ...model.elastic import parseval_weights
 from ...model.viscoelastic import arm_kernel
 from ..scheme import (A_WCONTACT, BODY_ROWS, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_DT,
                       P_ETAC, P_FOLD, P_KD, P_M, P_SLOW, P_VD)
+from ..jitcache import COMPILE_EACH_PROCESS, stable_cache
 from . import implicit, spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
-from ..jitcache import COMPILE_EACH_PROCESS, stable_cache
 from .base import N_CARRY, Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice_commit, lattice_explicit, row_parameters
 
