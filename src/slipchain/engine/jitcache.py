@@ -91,6 +91,8 @@ class StableFunctionCache(FunctionCache):
 
 def stable_cache(dispatcher: Dispatcher) -> Dispatcher:
     """Give a ``cache=True`` closure dispatcher the process-independent key (before its first compile).
+    Only the loops compiled on their own need it (compose's samples and drivers); the ``inline="always"``
+    steppers are inlined into them and never compiled, nor cached, alone.
 
     The cached code must be the code a process would compile, or a run's last bits would depend on
     whether its loop came from the cache (a run resumed in a new process would differ from the

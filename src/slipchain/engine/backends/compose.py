@@ -91,7 +91,6 @@ def fixed_stepper(explicit, commit, fastmath: bool):
     the body's loop flags (``fastmath``: the slab's loop was)."""
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
-    @stable_cache
     @nb.njit(cache=True, inline="always", **flags)
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
              scratch):
@@ -171,7 +170,6 @@ def adaptive_stepper(explicit, commit):
     step's time grid, the error from consecutive accelerations, rejection and restore), composed
     with a body."""
 
-    @stable_cache
     @nb.njit(cache=True, inline="always")
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
              scratch):
@@ -316,7 +314,6 @@ def implicit_stepper(explicit, commit, prony: bool = False):
     commit_be = viscoelastic.prony_be_commit if prony else commit
     be_try = implicit.be_try_arms if prony else implicit.be_try
 
-    @stable_cache
     @nb.njit(cache=True, inline="always")
     def step(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, j, nstep, sample_steps, rc,
              scratch):
