@@ -41,3 +41,42 @@ def test_drift_is_detected():
     assert steady_estimate(flat).drift_ok
     drifting = flat + np.linspace(0, 0.2, 4000)
     assert not steady_estimate(drifting).drift_ok
+
+
+def _run(t, f, x, t_transient=0.0):
+    import xarray as xr
+    return xr.Dataset({"f_d": ("time", f), "x_mean": ("time", x)}, coords={"time": t},
+                      attrs={"t_transient": t_transient})
+
+
+def test_sawtooth_of_system_wide_stick_slip_and_of_steady_sliding():
+    """analysis.geometry.sawtooth against series whose answer is known: a sawtooth of 12 cycles that
+    reloads linearly from 0 to 2 and falls at once while the interface advances only in the falls, and
+    steady sliding whose f_d is white noise about a mean while the interface advances uniformly."""
+    from slipchain.analysis.geometry import WHOLE_SLIP_SHARE, sawtooth, sawtooth_table
+
+    n, per = 2990, 250  # 1-ms samples, a fall every 250 samples (0.25 s): 11 falls in 2.99 s
+    i = np.arange(n) + 1
+    t = i * 1e-3
+    f = 2.0 * (i % per) / per  # the mean is about 1: the swing (p99 - p1)/mean is about 2
+    x = np.cumsum(i % per == 0) * 1e-4  # the interface advances only in the samples where f_d falls
+    s = sawtooth(_run(t, f, x))
+    assert s["cycles"] == 11
+    assert s["period"] == pytest.approx((t[-1] - t[0]) / 11)
+    assert s["swing"] == pytest.approx(1.96, abs=0.02)
+    assert s["event_share"] == pytest.approx(1.0)
+    # the transient is left out: the window starts on the 6th fall (t = 1.5 s), so 5 falls remain after it
+    assert sawtooth(_run(t, f, x, t_transient=1.499))["cycles"] == 5
+
+    rng = np.random.default_rng(3)
+    g = 1.0 + 0.01 * rng.standard_normal(n)
+    steady = sawtooth(_run(t, g, 1e-3 * t))
+    assert steady["swing"] == pytest.approx(4.65 * 0.01, rel=0.1)  # 2 x 2.326 standard deviations
+    assert steady["event_share"] == pytest.approx(0.5, abs=0.03)  # half the samples fall
+    assert steady["cycles"] > 200  # noise crosses the trigger levels every few samples
+
+    table = sawtooth_table([dict(geometry="slab", theta=1.0, v_d=1e-3, seed=k, **s) for k in (0, 1)]
+                           + [dict(geometry="chain2d", theta=1.0, v_d=1e-3, seed=0, **steady)])
+    assert list(table["geometry"]) == ["chain2d", "slab"] and list(table["n"]) == [1, 2]
+    assert table.set_index("geometry").loc["slab", "cycles"] == 22
+    assert list(table["whole"]) == [False, True] and WHOLE_SLIP_SHARE < 1.0

@@ -63,6 +63,12 @@ def test_fig6_3d_from_a_sweep(tmp_path):
     assert np.isinf(drops[drops["geometry"] == "halfspace"]["H_over_L"]).all()
     report = (out / "report.md").read_text()
     assert "| 1 |" in report and "halfspace" in report and (out / "fig6-3d.png").stat().st_size > 10_000
+    # f_d's sawtooth per point at each geometry's main size: one row per (geometry, theta, v_d) of one seed
+    saw = pd.read_csv(out / "sawtooth.csv")
+    assert set(saw["geometry"]) == set(table["geometry"]) and (saw["n"] == 1).all()
+    keys = ["geometry", "theta", "v_d"]
+    assert len(saw.merge(table[keys].drop_duplicates(), on=keys)) == len(saw) >= 10
+    assert "## The sawtooth per point" in report and saw["swing"].notna().all()
     # a store of one geometry (in its base config, as presets/fig6-3d-eps1.toml) is read as that geometry;
     # a store without v_d is refused, nothing written
     (tmp_path / "t.toml").write_text(SWEEP.split("[[grid]]")[0]

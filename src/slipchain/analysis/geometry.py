@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from ..results.observables import count_cycles
 from ..results.schema import Status
 from .statistics import base_config, drive_velocities, ratio, seed_average
 
@@ -90,6 +91,50 @@ def fig6_3d_data(ds: xr.Dataset) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
                                  "dashed_line": dashed_line(cfg, v_d2), "not_completed": not_completed(ds)}
 
 
+# A point slips as a whole (the paper's system-size events) where the samples in which f_d falls carry at
+# least this share of the interface's advance: every block then moves in the events, not in the reloading.
+WHOLE_SLIP_SHARE = 0.9
+
+
+def sawtooth(run: xr.Dataset) -> dict[str, float]:
+    """f_d(t) of one driven run in its steady window (t > t_transient) read as a stick-slip sawtooth.
+
+    ``cycles``: :func:`slipchain.results.observables.count_cycles` of f_d; ``period`` (s): the window's
+    length over the cycles (NaN without one); ``swing``: (99th - 1st percentile of f_d)/mean f_d, about 2
+    for a sawtooth that falls to zero, near 0 for steady sliding; ``event_share``: the share of the
+    interface's advance (``x_mean``, the mean interface block displacement) made in the samples in which
+    f_d falls, about 1/2 for noise about a mean and 1 where all motion happens in the slip events (at or
+    above :data:`WHOLE_SLIP_SHARE`: the whole interface slips together)."""
+    t = run["time"].values
+    keep = t > float(run.attrs.get("t_transient", 0.0))
+    f, x, t = run["f_d"].values[keep], run["x_mean"].values[keep], t[keep]
+    if f.size < 3:
+        return {"cycles": 0, "period": float("nan"), "swing": float("nan"), "event_share": float("nan")}
+    cycles = count_cycles(f)
+    lo, hi = np.percentile(f, [1, 99])
+    dx, falling = np.diff(x), np.diff(f) < 0
+    advance = dx.sum()
+    return {"cycles": cycles, "period": (t[-1] - t[0]) / cycles if cycles else float("nan"),
+            "swing": float((hi - lo) / f.mean()),
+            "event_share": float(dx[falling].sum() / advance) if advance > 0 else float("nan")}
+
+
+def sawtooth_table(rows: list[dict]) -> pd.DataFrame:
+    """Seed means of :func:`sawtooth` per (geometry, theta, v_d): ``rows`` holds one dict per run with those
+    keys, ``seed`` and the stats; ``cycles`` is summed over the seeds, ``n`` counts them."""
+    if not rows:
+        return pd.DataFrame(columns=["geometry", "theta", "v_d", "n", "cycles", "period", "swing", "event_share",
+                                     "whole"])
+    frame = pd.DataFrame(rows)
+    out = frame.groupby(["geometry", "theta", "v_d"], sort=False).agg(
+        n=("seed", "size"), cycles=("cycles", "sum"), period=("period", "mean"), swing=("swing", "mean"),
+        event_share=("event_share", "mean")).reset_index()
+    out["whole"] = out["event_share"] >= WHOLE_SLIP_SHARE
+    order = {g: i for i, g in enumerate(GEOMETRY_ORDER)}
+    return out.sort_values(["geometry", "v_d", "theta"], key=lambda c: c.map(order) if c.name == "geometry"
+                           else c).reset_index(drop=True)
+
+
 def _fmt(mu: float, err: float) -> str:
     return f"{mu:.3f} ± {err:.3f}"
 
@@ -136,6 +181,21 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
         lines.append(f"| {r['geometry']} | {int(r['N'])} x {int(r['Ly'])} | {int(r['N_L'])} | {hl} | {r['v_d']:g} | "
                      f"{r['theta_min']:g} -> {r['theta_max']:g} | {_fmt(r['ratio'], r['ratio_err'])} |")
     lines.append("")
+    saw = attrs.get("sawtooth")
+    if saw is not None and len(saw):
+        lines += ["## The sawtooth per point (main size)", "",
+                  "f_d(t) in each run's steady window (`analysis.geometry.sawtooth`; means over the seeds, cycles "
+                  "summed): the period is the window over the cycles; the swing is f_d's 1st-99th percentile range "
+                  "over its mean (about 2 for a sawtooth falling to zero, near 0 for steady sliding); the event "
+                  "share is the share of the interface's advance made in the samples in which f_d falls (1/2 for "
+                  f"noise, 1 when every block moves only in the events; 'whole' at {WHOLE_SLIP_SHARE:g} or more).",
+                  "", "| geometry | v_d | theta | seeds | cycles | period (s) | swing | event share | slips as a whole |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for _, r in saw.iterrows():
+            lines.append(f"| {r['geometry']} | {r['v_d']:g} | {r['theta']:g} | {int(r['n'])} | {int(r['cycles'])} | "
+                         f"{r['period']:.3g} | {r['swing']:.2f} | {r['event_share']:.2f} | "
+                         f"{'yes' if r['whole'] else 'no'} |")
+        lines.append("")
     bad = attrs.get("not_completed")
     if bad is not None and len(bad):
         lines += ["## Members that did not complete (left out of the means)", "",
@@ -148,4 +208,5 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     return "\n".join(lines)
 
 
-__all__ = ["GEOMETRY_ORDER", "drops", "fig6_3d_data", "geometry_table", "main_mask", "main_sizes", "report_markdown"]
+__all__ = ["GEOMETRY_ORDER", "WHOLE_SLIP_SHARE", "drops", "fig6_3d_data", "geometry_table", "main_mask", "main_sizes",
+           "report_markdown", "sawtooth", "sawtooth_table"]

@@ -51,17 +51,25 @@ def fig6(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 
 def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "", wall: str = "") -> list[Path]:
-    """Fig. 6 in 3-D (issue 13): the figure, report.md, table.csv (seed means) and drops.csv (the load
-    effect per geometry, size and velocity) from a store sweeping theta and v_d (and geometry, or one
+    """Fig. 6 in 3-D (issue 13): the figure, report.md, table.csv (seed means), drops.csv (the load
+    effect per geometry, size and velocity) and sawtooth.csv (f_d's cycles per point at the main size) from a store sweeping theta and v_d (and geometry, or one
     geometry in its base config: presets/fig6-3d-eps1.toml)."""
-    from ..analysis.geometry import fig6_3d_data, report_markdown
+    from ..analysis.geometry import fig6_3d_data, report_markdown, sawtooth, sawtooth_table
     from ..plots.geometry import plot_fig6_3d
     from ..results.io import write_csv, write_text_atomic
 
     table, drop, attrs = fig6_3d_data(sweep_dataset(store, {"theta", "v_d"}, "the Fig. 6-in-3-D figure"))
+    saw = []  # the sawtooth of every completed run at its geometry's main size
+    st = Store.open(store)
+    done = st.completed_ids()
+    for m in st.sweep.members:
+        c = m.config
+        if m.id in done and attrs["main"].get(c.geometry) == (c.N, c.Ly, c.N_L):
+            saw.append(dict(geometry=c.geometry, theta=c.theta, v_d=c.v_d, seed=c.seed, **sawtooth(st.read_member(m))))
+    attrs["sawtooth"] = sawtooth_table(saw)
     paths = plot_fig6_3d(table, drop, attrs, out)
     paths += [write_csv(frame, Path(out) / name, float_format="%.6g")
-              for name, frame in (("table.csv", table), ("drops.csv", drop))]
+              for name, frame in (("table.csv", table), ("drops.csv", drop), ("sawtooth.csv", attrs["sawtooth"]))]
     return paths + [write_text_atomic(Path(out) / "report.md", report_markdown(table, drop, attrs, command=command,
                                                                              wall=wall))]
 
