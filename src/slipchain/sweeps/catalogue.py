@@ -47,7 +47,7 @@ CATALOGUE: dict[str, Study] = {
                          "Fig. 6 with a viscoelastic slider (Prony bulk) at 20 and 11 °C"),
     "fig6-rubber-elastic": Study("study", 72, "25 s", "docs/fig6-rubber/index.md",
                                  "the elastic twin of fig6-rubber: the paper's model on its grid and step"),
-    "fig6-rubber-slab": Study("study", 144, "5.5 h (v_d1: 31 min; a v_d2 run 7-9 min)", "docs/fig6-rubber-slab/index.md",
+    "fig6-rubber-slab": Study("study", 144, "3 h (v_d1: 31 min; a v_d2 run 4-8 min)", "docs/fig6-rubber-slab/index.md",
                               "Fig. 6 in rubber on a 64 x 64 slab under the drive springs, 20 and 11 °C"),
     "fig6-rubber-slab-elastic": Study("study", 72, "15 min (v_d1: 5 min; a v_d2 run 34 s)", "docs/fig6-rubber-slab/index.md",
                                       "the elastic twin of fig6-rubber-slab: the elastic slab on its grid and step"),
