@@ -38,9 +38,11 @@ CATALOGUE: dict[str, Study] = {
                        "Fig. 6 at the physical contact stiffness, epsilon = 1"),
     "fig6-3d": Study("study", 100, "29 min", "docs/fig6-3d/index.md",
                      "Fig. 6 on a 2-D interface: the 2-D chains and an elastic slab"),
-    "fig6-3d-eps1": Study("study", 48, "50 min (est.; its first 16 slab runs: 13 min)", "docs/fig6-3d-eps1/index.md",
+    "fig6-3d-eps1": Study("study", 48, "56 min", "docs/fig6-3d-eps1/index.md",
                           "Fig. 6 on a 64 x 64 slab and 2-D chains at the physical contact stiffness, epsilon = 1 "
                           "(implicit)"),
+    "fig6-3d-eps1-128": Study("study", 48, "4 h (est.: 4x fig6-3d-eps1)", "docs/fig6-3d-eps1/index.md",
+                              "fig6-3d-eps1 on the 128 x 128 interface of issue 27 (run in parts: it resumes)"),
     "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
                                  "fig6-3d-eps1 in rubber at v_d1: the 64 x 64 rubber slab at epsilon = 1 (implicit)"),
     "fig6-rubber": Study("study", 144, "10 min", "docs/fig6-rubber/index.md",
