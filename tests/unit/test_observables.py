@@ -50,7 +50,7 @@ def _run(t, f, x, t_transient=0.0):
 
 
 def test_sawtooth_of_system_wide_stick_slip_and_of_steady_sliding():
-    """analysis.geometry.sawtooth against series whose answer is known: a sawtooth of 12 cycles that
+    """analysis.geometry.sawtooth against series whose answer is known: a sawtooth with 11 falls that
     reloads linearly from 0 to 2 and falls at once while the interface advances only in the falls, and
     steady sliding whose f_d is white noise about a mean while the interface advances uniformly."""
     from slipchain.analysis.geometry import WHOLE_SLIP_SHARE, sawtooth, sawtooth_table

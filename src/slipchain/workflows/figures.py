@@ -52,8 +52,9 @@ def fig6(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "", wall: str = "") -> list[Path]:
     """Fig. 6 in 3-D (issue 13): the figure, report.md, table.csv (seed means), drops.csv (the load
-    effect per geometry, size and velocity) and sawtooth.csv (f_d's cycles per point at the main size) from a store sweeping theta and v_d (and geometry, or one
-    geometry in its base config: presets/fig6-3d-eps1.toml)."""
+    effect per geometry, size and velocity) and sawtooth.csv (f_d's cycles per point at the main size)
+    from a store sweeping theta and v_d (and geometry, or one geometry in its base config:
+    presets/fig6-3d-eps1.toml)."""
     from ..analysis.geometry import fig6_3d_data, report_markdown, sawtooth, sawtooth_table
     from ..plots.geometry import plot_fig6_3d
     from ..results.io import write_csv, write_text_atomic
