@@ -367,9 +367,11 @@ def test_a_plan_run_in_batches_equals_one_run_per_task_and_its_sweep_store_reads
         runs = pd_one[pd_one["theta"] == 1.0]
         sweep = make_sweep({"name": "dw", "base": {"N": 11, "delta": 0.0, "start": "steady", "t_total": 5e-3,
                                                    "dead_weight": 0.5},
-                            "grid": {"theta": [1.0], "seed": [0, 1], "dead_weight": sorted(set(runs["mu_a"]))}})
+                            "grid": {"theta": [1.0], "seed": [0, 1], "dead_weight": sorted(set(runs["mu_a"])),
+                                     "eta_c": [1e5]}})
         run_sweep(sweep, tmp_path / "store", client=client, progress=False)
     got = store_evaluations(tmp_path / "store")
+    assert (got["eta_c"] == 1e5).all()  # a swept parameter besides theta, seed and dead_weight is a column
     both = runs.merge(got, on=["seed", "mu_a"], suffixes=("", "_sweep"))
     assert len(both) == len(runs) and (both["source_sweep"] == "sweep").all()
     assert (both["velocity_status"] == both["velocity_status_sweep"]).all()

@@ -82,6 +82,28 @@ def test_an_undecided_load_gives_the_bounds_and_the_range_of_the_ratio(tmp_path)
     assert ev.bounds.endswith("theta = 1: steady up to mu_a = 0.93")
 
 
+def test_a_grid_of_runs_over_several_ramps_is_read_one_ramp_at_a_time(tmp_path):
+    """An evaluations rung with ``where`` (presets/ladder-eps1-slow-grid.toml sweeps the ramp too): the
+    bounds come from the chosen ramp's runs alone; a column or value the table lacks is an error
+    that names them."""
+    pd.DataFrame([
+        {"theta": 0.5, "seed": 0, "t_ramp": 2.0, "mu_a": 0.65, "velocity_status": "no-steady"},
+        {"theta": 0.5, "seed": 0, "t_ramp": 2.0, "mu_a": 0.75, "velocity_status": "runaway"},
+        {"theta": 0.5, "seed": 0, "t_ramp": 20.0, "mu_a": 0.75, "velocity_status": "ok"},
+        {"theta": 0.5, "seed": 0, "t_ramp": 20.0, "mu_a": 0.85, "velocity_status": "runaway"},
+    ]).to_csv(tmp_path / "g.csv", index=False)
+    slow = effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 20.0})
+    assert slow.bounds == "theta = 0.5: steady up to mu_a = 0.75, runaway from mu_a = 0.85"
+    fast = effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 2.0})
+    assert fast.bounds == "theta = 0.5: runaway from mu_a = 0.75, no-steady at mu_a = 0.65"
+    both = effect_of_evaluations(tmp_path / "g.csv")
+    assert both.bounds == "theta = 0.5: steady up to mu_a = 0.75, runaway from mu_a = 0.75, no-steady at mu_a = 0.65"
+    with pytest.raises(ConfigError, match="columns of the table"):
+        effect_of_evaluations(tmp_path / "g.csv", {"t_decide": 2.5})
+    with pytest.raises(ConfigError, match="a selection with rows"):
+        effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 6.0})
+
+
 def test_a_bad_ladder_file_names_the_rung_key_and_value(tmp_path):
     bad = tmp_path / "l.toml"
     bad.write_text('[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "guess"\nsource = "x"\n')

@@ -343,20 +343,25 @@ def evaluations_table(configs: list[Config], results: list[MuMax]) -> "pd.DataFr
 def store_evaluations(store: str | os.PathLike) -> "pd.DataFrame":
     """Every member of a sweep store over ``dead_weight`` as the rows of :func:`evaluations_table`
     (source 'sweep'): the tester's classification of each run, or its failure status (a member not
-    run yet: 'error', 'not run')."""
+    run yet: 'error', 'not run'), with a column for each other parameter the sweep varies (e.g. the
+    ramp ``t_ramp`` of presets/ladder-eps1-slow-grid.toml)."""
     from ..sweeps.store import Store
 
     st = Store.open(store)  # member_attrs: None for a member not run yet, never an exception
+    extra = [d for d in st.sweep.dims if d not in ("theta", "seed", "dead_weight")]
     return _evaluation_rows([(m.config, _evaluation(m.config.dead_weight, st.member_attrs(m))) for m in st.sweep.members],
-                            "sweep")
+                            "sweep", extra)
 
 
-def _evaluation_rows(pairs: list[tuple[Config, Evaluation]], source: str) -> "pd.DataFrame":
+def _evaluation_rows(pairs: list[tuple[Config, Evaluation]], source: str, extra: list[str] = ()) -> "pd.DataFrame":
+    """One row per evaluation: theta, seed, the ``extra`` config keys, mu_a, the tester's status, the
+    velocity, the source, and the message (for an undecided run, why: its velocity's drift)."""
     import pandas as pd
 
-    return pd.DataFrame([{"theta": c.theta, "seed": c.seed, "mu_a": e.mu_a, "velocity_status": e.velocity_status,
-                          "velocity_m_s": e.velocity, "source": source} for c, e in pairs],
-                        columns=["theta", "seed", "mu_a", "velocity_status", "velocity_m_s", "source"])
+    columns = ["theta", "seed", *extra, "mu_a", "velocity_status", "velocity_m_s", "source", "message"]
+    return pd.DataFrame([{"theta": c.theta, "seed": c.seed, **{k: getattr(c, k) for k in extra}, "mu_a": e.mu_a,
+                          "velocity_status": e.velocity_status, "velocity_m_s": e.velocity, "source": source,
+                          "message": e.message} for c, e in pairs], columns=columns)
 
 
 # --- a mu-max plan: the base config and the bisection's settings in one TOML file ------------------

@@ -13,7 +13,8 @@ and pull). A rung names its observable and where its numbers are; nothing is typ
   by ``where`` (column = value): mu_star at the smallest and the largest theta;
 - ``kind = "evaluations"``: a CSV of dead-weight runs (theta, mu_a, velocity_status: a mu-max
   ``evaluations.csv``, or :func:`~slipchain.workflows.dead_weight.store_evaluations` of a sweep
-  over ``dead_weight``): the bounds on mu_max that its runs give at each load, no ratio;
+  over ``dead_weight``; rows chosen by ``where`` as a table's): the bounds on mu_max that its runs
+  give at each load, no ratio;
 - ``kind = "none"``: not measured yet (``note`` says why and what stands in).
 
 The load effect is the ratio R = obs(theta_max) / obs(theta_min) with its standard error by
@@ -169,22 +170,22 @@ def _bounds(ev: "pd.DataFrame", theta: float) -> str:
     return ", ".join(parts) if parts else "no runs"
 
 
-def effect_of_evaluations(path: Path) -> Effect:
-    """A CSV of dead-weight runs: the bounds on mu_max at every load (module docstring), no ratio."""
+def effect_of_evaluations(path: Path, where: dict[str, Any] | None = None) -> Effect:
+    """A CSV of dead-weight runs, its rows chosen by ``where`` (column = value, as a table's: e.g. one
+    ramp ``t_ramp`` of a sweep over several): the bounds on mu_max at every load (module docstring),
+    no ratio."""
     import pandas as pd
 
-    ev = pd.read_csv(path)
+    ev = _select(pd.read_csv(path), where or {}, path)
     thetas = sorted(ev["theta"].unique())
     bounds = "; ".join(f"theta = {t:g}: {_bounds(ev, t)}" for t in thetas)
     return Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]), bounds=bounds,
                   per_load="; ".join(f"{t:g}: {_bounds(ev, t)}" for t in thetas))
 
 
-def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
-    """A CSV table (module docstring): mu_star at the smallest and largest theta of the rows chosen."""
-    import pandas as pd
-
-    d = pd.read_csv(path)
+def _select(d: "pd.DataFrame", where: dict[str, Any], path: Path) -> "pd.DataFrame":
+    """The rows of table ``d`` (read from ``path``) where every ``where`` column has its value
+    (numbers compared with np.isclose); ConfigError if a column is missing or nothing is left."""
     for key, value in where.items():
         if key not in d.columns:
             raise ConfigError(f"table {os.fspath(path)!r}: " + _message("where", where, f"columns of the table "
@@ -192,6 +193,14 @@ def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
         d = d[np.isclose(d[key], value)] if isinstance(value, (int, float)) else d[d[key].astype(str) == str(value)]
     if d.empty:
         raise ConfigError(f"table {os.fspath(path)!r}: " + _message("where", where, "a selection with rows"))
+    return d
+
+
+def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
+    """A CSV table (module docstring): mu_star at the smallest and largest theta of the rows chosen."""
+    import pandas as pd
+
+    d = _select(pd.read_csv(path), where, path)
     if "mu" in d.columns:
         g = d.groupby("theta").agg(mu=("mu", "mean"), err=("err", "mean"))
     else:
@@ -217,7 +226,7 @@ def ladder_table(path: str | os.PathLike) -> "pd.DataFrame":
         elif r.kind == "table":
             e = effect_of_table(src, r.where)
         elif r.kind == "evaluations":
-            e = effect_of_evaluations(src)
+            e = effect_of_evaluations(src, r.where)
         else:
             e = Effect()
         rows.append({"rung": r.name, "adds": r.adds, "observable": r.observable, "theta_min": e.theta_min,
