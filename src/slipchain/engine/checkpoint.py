@@ -12,7 +12,8 @@ stopped:
   limit above the config's says the run was extended by its slip cycles), active/status/message, the automatic length's f_d and <x> series and its last SE (the
   dead-weight ramp is a function of the samples done);
 * the recorder (:class:`~slipchain.engine.observers.Recorder`): every sample so far, the chunk
-  boundaries, the per-contact sums per chunk and the work sums;
+  boundaries, the per-contact sums per chunk (one running sum for a dead-weight run) and the work
+  sums;
 * the start values the result needs (<x> and the stored energy at the start), the wall time so far
   and the simulated times of earlier resumes.
 
@@ -163,6 +164,8 @@ class Checkpointer:
                 c.decide.reached = bool(ds["conv_reached"].values[r])
             recorder.contact_sums[r] = [s.copy() for s in ds[f"rec_contact_sums_{r}"].values] if lengths.size else []
             recorder.chunk_starts[r] = [int(v) for v in ds[f"rec_chunk_starts_{r}"].values]
+            recorder.chunk_samples[r] = [int(v) for v in lengths]
+            recorder.collapse(r)
             recorder.n[r] = int(ds["rec_n"].values[r])
         works = ds["rec_works"].values
         recorder.works[...] = 0.0
@@ -200,7 +203,7 @@ def _to_dataset(systems, batch: Batch, controls: list[RowControl], rec: Recorder
         samples = rec.samples[r]
         data[f"rec_samples_{r}"] = ((f"sample_{r}", "out"), np.concatenate(samples) if samples else
                                     np.zeros((0, S.N_OUT)))
-        data[f"rec_chunk_samples_{r}"] = (f"chunk_{r}", np.array([s.shape[0] for s in samples], dtype=np.int64))
+        data[f"rec_chunk_samples_{r}"] = (f"chunk_{r}", np.asarray(rec.chunk_samples[r], dtype=np.int64))
         data[f"rec_chunk_starts_{r}"] = (f"chunk_{r}", np.asarray(rec.chunk_starts[r], dtype=np.int64))
         sums = rec.contact_sums[r]
         nc = rec.n_contacts[r]

@@ -30,30 +30,55 @@ class Observer(Protocol):
 
 class Recorder:
     """Collects every row's chunk outputs: per-sample f_d and mean displacements, per-chunk
-    per-contact sums, and the work sums."""
+    per-contact sums, and the work sums.
 
-    def __init__(self, n_contacts: list[int]):
+    A row in ``whole`` (a dead-weight run: its per-contact averages are over the whole run,
+    :func:`~slipchain.results.schema.assemble_run`) keeps one per-contact record, the running sum
+    over its chunks in their order (the sum the whole-run average adds up, bit for bit), instead of
+    one per chunk: its force ramp advances one sample per chunk, so a ramp of 20 s in 0.1-ms samples
+    would otherwise hold 200 000 records (2 GB for 301 contacts, and as much in each checkpoint)."""
+
+    def __init__(self, n_contacts: list[int], whole: list[bool] | None = None):
         self.n_contacts = n_contacts
+        self.whole = list(whole) if whole is not None else [False] * len(n_contacts)
         self.samples: list[list[np.ndarray]] = [[] for _ in n_contacts]
         self.contact_sums: list[list[np.ndarray]] = [[] for _ in n_contacts]
         self.chunk_starts: list[list[int]] = [[] for _ in n_contacts]
+        self.chunk_samples: list[list[int]] = [[] for _ in n_contacts]  # samples per contact-sum record
         self.works = np.zeros((len(n_contacts), S.N_ACC))
         self.n = [0] * len(n_contacts)
 
     def chunk(self, batch: Batch, out: ChunkOutput, live: list[int], n: int) -> None:
         for i in live:
             nc = self.n_contacts[i]
-            self.chunk_starts[i].append(self.n[i])
+            ns = out.out.shape[1]
             self.samples[i].append(out.out[i].copy())
-            self.contact_sums[i].append(out.cacc[i, :, :nc].T.copy())
+            if self.whole[i] and self.contact_sums[i]:
+                self.contact_sums[i][0] += out.cacc[i, :, :nc].T
+                self.chunk_samples[i][0] += ns
+            else:
+                self.chunk_starts[i].append(self.n[i])
+                self.contact_sums[i].append(out.cacc[i, :, :nc].T.copy())
+                self.chunk_samples[i].append(ns)
             self.works[i] += out.acc[i]
-            self.n[i] += out.out.shape[1]
+            self.n[i] += ns
+
+    def collapse(self, row: int) -> None:
+        """A ``whole`` row restored with a record per chunk (a checkpoint written before it kept one):
+        those records summed in their order into one, as :meth:`chunk` would have kept them."""
+        if self.whole[row] and len(self.contact_sums[row]) > 1:
+            total = self.contact_sums[row][0].copy()
+            for cs in self.contact_sums[row][1:]:
+                total += cs
+            self.contact_sums[row] = [total]
+            self.chunk_samples[row] = [int(sum(self.chunk_samples[row]))]
+            self.chunk_starts[row] = [self.chunk_starts[row][0]]
 
     def recording(self, row: int) -> Recording:
         """Row ``row``'s recording in the run schema's plain form."""
         series = np.concatenate(self.samples[row]) if self.samples[row] else np.zeros((0, S.N_OUT))
         return Recording(f_d=series[:, S.O_FD], x_mean=series[:, S.O_XMEAN], X_mean=series[:, S.O_XUMEAN],
-                         chunk_starts=list(self.chunk_starts[row]), chunk_samples=[s.shape[0] for s in self.samples[row]],
+                         chunk_starts=list(self.chunk_starts[row]), chunk_samples=list(self.chunk_samples[row]),
                          contact_sums=list(self.contact_sums[row]),
                          works=self.works[row][[S.A_WDRIVE, S.A_WDAMP, S.A_WCONTACT, S.A_WVISC]])
 

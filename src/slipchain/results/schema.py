@@ -210,11 +210,14 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
             message = "physics check failed at the end of the run (t = %.6e s): %s" % (
                 n * interval, "; ".join(c.message for c in failed)) + (f" (and: {message})" if message else "")
 
-    # Per-contact averages over the chunks that lie wholly in the steady window.
+    # Per-contact averages over the chunks that lie wholly in the steady window; for a dead-weight run
+    # over the whole run (its f_d, the drive springs' force, is zero, so MSER's window is the whole run
+    # anyway; its recorder keeps one running sum: observers.Recorder).
+    contact_start = 0 if cfg.dead_weight is not None else start
     sums = np.zeros((system.n_contacts, 4))
     steady_steps = 0
     for s0, ns, cs in zip(rec.chunk_starts, rec.chunk_samples, rec.contact_sums):
-        if s0 >= start:
+        if s0 >= contact_start:
             sums += cs
             steady_steps += ns * steps_per_sample
     with np.errstate(invalid="ignore", divide="ignore"):
