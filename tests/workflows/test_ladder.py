@@ -40,6 +40,11 @@ def test_a_table_gives_the_ratio_of_its_extreme_loads_with_the_propagated_error(
         effect_of_table(tmp_path / "t.csv", {"v_d": 5.0})
     with pytest.raises(ConfigError, match="columns of the table"):
         effect_of_table(tmp_path / "t.csv", {"eta_c": 1e5})
+    # a figure's table with two points per theta that `where` leaves (here both velocities) is refused,
+    # naming the column that tells them apart, never averaged (docs/fig6-3d-eps1/table.csv grew a
+    # geometry column, and a rung that chose only v_d averaged the slab with the 2-D chains)
+    with pytest.raises(ConfigError, match=r"one row per theta \(rows at theta = 0.05 differ in v_d"):
+        effect_of_table(tmp_path / "t.csv", {})
 
 
 def _mu_max_output(path: Path) -> None:

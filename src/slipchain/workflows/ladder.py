@@ -202,6 +202,14 @@ def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
 
     d = _select(pd.read_csv(path), where, path)
     if "mu" in d.columns:
+        # a figure's table has one row per point: several at one theta are points of another dimension
+        # (a geometry, a size), which ``where`` must choose, never averaged
+        many = d[d.duplicated("theta", keep=False)]
+        if len(many):
+            varied = [c for c in d.columns if c not in ("theta", "mu", "err") and many[c].nunique(dropna=False) > 1]
+            raise ConfigError(f"table {os.fspath(path)!r}: " + _message(
+                "where", where, f"one row per theta (rows at theta = {many['theta'].iloc[0]:g} differ in "
+                f"{', '.join(varied)}: choose with where)"))
         g = d.groupby("theta").agg(mu=("mu", "mean"), err=("err", "mean"))
     else:
         d = d[d["status"] == "completed"] if "status" in d.columns else d
