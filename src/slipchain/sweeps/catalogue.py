@@ -41,7 +41,7 @@ CATALOGUE: dict[str, Study] = {
     "fig6-3d-eps1": Study("study", 48, "56 min", "docs/fig6-3d-eps1/index.md",
                           "Fig. 6 on a 64 x 64 slab and 2-D chains at the physical contact stiffness, epsilon = 1 "
                           "(implicit)"),
-    "fig6-3d-eps1-128": Study("study", 48, "7 h (est.: ~7x fig6-3d-eps1 per run)", "docs/fig6-3d-eps1/index.md",
+    "fig6-3d-eps1-128": Study("study", 48, "over 10 h (est.: theta = 1 ~8x fig6-3d-eps1 per run, theta = 0.05 more)", "docs/fig6-3d-eps1/index.md",
                               "fig6-3d-eps1 on the 128 x 128 interface of issue 27 (run in parts: it resumes)"),
     "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
                                  "fig6-3d-eps1 in rubber at v_d1: the 64 x 64 rubber slab at epsilon = 1 (implicit)"),
