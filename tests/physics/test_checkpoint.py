@@ -198,7 +198,8 @@ def test_a_dead_weight_run_keeps_one_contact_record_bit_for_bit_and_resumes_from
         old = tmp_path / "old.nc"
         with pytest.raises(Crash):
             run(cfg, checkpoint=old, checkpoint_every=0)
-    assert xr.open_dataset(old).sizes["chunk_0"] == 120
+    with xr.open_dataset(old) as ds:
+        assert ds.sizes["chunk_0"] == 120
     _same(reference, run(cfg, checkpoint=old, checkpoint_every=0))
     new = tmp_path / "new.nc"
     with monkeypatch.context() as m:

@@ -33,7 +33,7 @@ class Recorder:
     per-contact sums, and the work sums.
 
     A row in ``whole`` (a dead-weight run: its per-contact averages are over the whole run,
-    :func:`~slipchain.results.schema.assemble_run`) keeps one per-contact record, the running sum
+    :func:`~slipchain.results.schema.contacts_over_whole_run`) keeps one per-contact record, the running sum
     over its chunks in their order (the sum the whole-run average adds up, bit for bit), instead of
     one per chunk: its force ramp advances one sample per chunk, so a ramp of 20 s in 0.1-ms samples
     would otherwise hold 200 000 records (2 GB for 301 contacts, and as much in each checkpoint)."""

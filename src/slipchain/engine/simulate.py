@@ -22,7 +22,7 @@ import xarray as xr
 from ..model.config import Config, make_config
 from ..model.system import State, System, build_system, initial_state
 from ..results.checks import arm_energy, stored_energy
-from ..results.schema import assemble_run
+from ..results.schema import assemble_run, contacts_over_whole_run
 from .backends import BackendName, Batch, get_backend
 from .checkpoint import CHECKPOINT_EVERY, Checkpointer
 from .control import chunk_samples, row_control
@@ -88,7 +88,7 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     e0 = [stored_energy(s, st) for s, st in zip(systems, states0)]
     a0 = [arm_energy(s, st) for s, st in zip(systems, states0)]  # material 'prony': the arms' energy at the start
     controls = [row_control(s, x0[i], interval, extension_refusal) for i, s in enumerate(systems)]
-    recorder = Recorder([s.n_contacts for s in systems], [s.config.dead_weight is not None for s in systems])
+    recorder = Recorder([s.n_contacts for s in systems], [contacts_over_whole_run(s.config) for s in systems])
     saver, wall_before, resumed_at = None, 0.0, []
     if checkpoint is not None:
         saver = Checkpointer(checkpoint, checkpoint_every)

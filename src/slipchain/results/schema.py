@@ -183,6 +183,14 @@ class Recording:
     works: np.ndarray
 
 
+def contacts_over_whole_run(cfg) -> bool:
+    """Whether a run's per-contact averages are over the whole run rather than the steady window of
+    f_d: a dead-weight run (its f_d, the drive springs' force, is zero, so MSER's window is the whole
+    run anyway). The recorder keeps such a run's per-contact sums as one running record
+    (:class:`slipchain.engine.observers.Recorder`), which only this window can read."""
+    return cfg.dead_weight is not None
+
+
 def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float, e0: float, interval: float,
                  a0: float = 0.0,
                  steps_per_sample: int, status: Status, message: str, sem_reached: bool, wall: float,
@@ -210,10 +218,8 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
             message = "physics check failed at the end of the run (t = %.6e s): %s" % (
                 n * interval, "; ".join(c.message for c in failed)) + (f" (and: {message})" if message else "")
 
-    # Per-contact averages over the chunks that lie wholly in the steady window; for a dead-weight run
-    # over the whole run (its f_d, the drive springs' force, is zero, so MSER's window is the whole run
-    # anyway; its recorder keeps one running sum: observers.Recorder).
-    contact_start = 0 if cfg.dead_weight is not None else start
+    # Per-contact averages over the chunks that lie wholly in the steady window (or the whole run)
+    contact_start = 0 if contacts_over_whole_run(cfg) else start
     sums = np.zeros((system.n_contacts, 4))
     steady_steps = 0
     for s0, ns, cs in zip(rec.chunk_starts, rec.chunk_samples, rec.contact_sums):
@@ -379,7 +385,7 @@ def summary(ds: xr.Dataset) -> dict[str, Any]:
 
 
 __all__ = ["DECIDE_DRIFT", "RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
-           "Status", "after_ramp", "assemble_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
+           "Status", "after_ramp", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
 
 if __name__ == "__main__":  # pragma: no cover - regenerates docs/run-schema.md
     print(schema_markdown(), end="")
