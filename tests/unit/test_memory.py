@@ -28,6 +28,10 @@ def test_the_estimate_grows_as_the_arrays_do_and_a_batch_counts_every_row():
     assert estimate_bytes(make_config(N=20_000, theta=1.0, t_total=1e-2)) == pytest.approx(2 * estimate_bytes(c), rel=0.01)
     longer = estimate_bytes(make_config(N=10_000, theta=1.0, t_total=2e-2)) - estimate_bytes(c)
     assert longer == pytest.approx(10_000 * 4 * 8 * 20, rel=0.05)  # per-chunk contact sums: 20 more chunks of 0.5 ms
+    # A dead-weight run keeps one per-contact record however long it runs (the recorder's running sum):
+    # only its output samples grow with its length.
+    dw, dw2 = (make_config(N=10_000, theta=1.0, dead_weight=0.8, t_max=t, start="rest") for t in (1.0, 2.0))
+    assert estimate_bytes(dw2) - estimate_bytes(dw) == pytest.approx(1.0 / dw.output_interval * 128, rel=0.01)
     one = check_memory([c], available=10 * GiB)
     with pytest.raises(MemoryEstimateError, match="3 realisations run together") as e:
         check_memory([c] * 3, available=int(2.5 * one) + 300 * 2**20)

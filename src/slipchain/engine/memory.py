@@ -11,7 +11,8 @@ The estimate (:func:`estimate_bytes`) counts what grows with the run, per realis
 * ``BYTES_PER_CONTACT`` per contact: sites and v*, the solver's warm start, scratch, the
   per-contact results; plus ``N_CACC * 8`` bytes per contact **per chunk** of ``CHUNK_TIME``
   simulated seconds (the per-chunk contact sums from which the steady window's means are taken:
-  the term that dominates long runs of large N);
+  the term that dominates long runs of large N), one such record in all for a dead-weight run, whose
+  averages span the whole run (:func:`slipchain.results.schema.contacts_over_whole_run`);
 * ``BYTES_PER_SAMPLE`` per output sample of f_d and the mean displacements.
 
 The coefficients were measured with peak RSS (``benchmarks/memory_estimate.py`` prints estimate
@@ -33,6 +34,7 @@ from typing import Iterable
 
 from ..model.config import Config, ConfigError
 from ..model.geometries import geometry_of
+from ..results.schema import contacts_over_whole_run
 from . import scheme as S
 from .control import CHUNK_TIME, LONG_CHUNK_TIME, chunk_time
 
@@ -67,6 +69,8 @@ def estimate_bytes(cfg: Config, t: float | None = None) -> int:
     chunks = int((cfg.t_max if extended else t) / max(chunk_time(cfg), cfg.output_interval)) + 1
     if extended:
         chunks += int((t - cfg.t_max) / max(LONG_CHUNK_TIME, cfg.output_interval)) + 1
+    if contacts_over_whole_run(cfg):  # one running per-contact sum (the recorder's), whatever the length
+        chunks = 1
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
     per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if geometry_of(cfg).spectral else 0)
