@@ -85,6 +85,9 @@ def test_an_undecided_load_gives_the_bounds_and_the_range_of_the_ratio(tmp_path)
     ev = effect_of_evaluations(tmp_path / "mm" / "evaluations.csv")
     assert math.isnan(e.ratio) and ev.bounds.startswith("theta = 0.1: steady up to mu_a = 0.5, runaway from mu_a = 0.5")
     assert ev.bounds.endswith("theta = 1: steady up to mu_a = 0.93")
+    # ... and the range of R its runs allow, by the same rule: at theta = 1 mu_max in [0.91, inf)
+    # (the envelope of seed 0's [0.93, inf) and seed 1's [0.91, inf)), at 0.1 in [0, 0.8]
+    assert ev.ratio_min == pytest.approx(0.91 / 0.8) and math.isnan(ev.ratio_max)
 
 
 def test_a_grid_of_runs_over_several_ramps_is_read_one_ramp_at_a_time(tmp_path):
@@ -99,6 +102,8 @@ def test_a_grid_of_runs_over_several_ramps_is_read_one_ramp_at_a_time(tmp_path):
     ]).to_csv(tmp_path / "g.csv", index=False)
     slow = effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 20.0})
     assert slow.bounds == "theta = 0.5: steady up to mu_a = 0.75, runaway from mu_a = 0.85"
+    # one load is both ends: R in [0.75/0.85, 0.85/0.75]
+    assert (slow.ratio_min, slow.ratio_max) == (pytest.approx(0.75 / 0.85), pytest.approx(0.85 / 0.75))
     fast = effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 2.0})
     assert fast.bounds == "theta = 0.5: runaway from mu_a = 0.75, no-steady at mu_a = 0.65"
     both = effect_of_evaluations(tmp_path / "g.csv")

@@ -14,7 +14,7 @@ and pull). A rung names its observable and where its numbers are; nothing is typ
 - ``kind = "evaluations"``: a CSV of dead-weight runs (theta, mu_a, velocity_status: a mu-max
   ``evaluations.csv``, or :func:`~slipchain.workflows.dead_weight.store_evaluations` of a sweep
   over ``dead_weight``; rows chosen by ``where`` as a table's): the bounds on mu_max that its runs
-  give at each load, no ratio;
+  give at each load, and the range of R they allow, no ratio;
 - ``kind = "none"``: not measured yet (``note`` says why and what stands in).
 
 The load effect is the ratio R = obs(theta_max) / obs(theta_min) with its standard error by
@@ -132,10 +132,18 @@ def effect_of_mu_max(out: Path) -> Effect:
                            if t in summary.index else f"{t:g}: {_bounds(ev, t)}" for t in thetas)
     _ratio(e)
     if notes:
-        (l0, l1), (h0, h1) = ((_interval(ev, t) if not np.isfinite(v) else (v, v))
-                              for t, v in ((thetas[0], e.low), (thetas[-1], e.high)))
-        e.ratio_min = h0 / l1 if l1 > 0 else math.nan
-        e.ratio_max = h1 / l0 if l0 > 0 else math.nan
+        _ratio_range(e, ev)
+    return e
+
+
+def _ratio_range(e: Effect, ev: "pd.DataFrame") -> Effect:
+    """The range of R that the runs ``ev`` allow where a load has no mu_max (``e.low`` or ``e.high``
+    NaN: its :func:`_interval` stands in; a decided load is its own point): R in [h0 / l1, h1 / l0],
+    NaN for an end the runs leave open (no steady run at the smallest load: no upper end)."""
+    (l0, l1), (h0, h1) = ((_interval(ev, t) if not np.isfinite(v) else (v, v))
+                          for t, v in ((e.theta_min, e.low), (e.theta_max, e.high)))
+    e.ratio_min = h0 / l1 if l1 > 0 else math.nan
+    e.ratio_max = h1 / l0 if l0 > 0 else math.nan
     return e
 
 
@@ -172,15 +180,16 @@ def _bounds(ev: "pd.DataFrame", theta: float) -> str:
 
 def effect_of_evaluations(path: Path, where: dict[str, Any] | None = None) -> Effect:
     """A CSV of dead-weight runs, its rows chosen by ``where`` (column = value, as a table's: e.g. one
-    ramp ``t_ramp`` of a sweep over several): the bounds on mu_max at every load (module docstring),
-    no ratio."""
+    ramp ``t_ramp`` of a sweep over several): the bounds on mu_max at every load (module docstring)
+    and the range of R they allow between the smallest and the largest load (:func:`_ratio_range`;
+    held but not steady runs bound nothing), no ratio."""
     import pandas as pd
 
     ev = _select(pd.read_csv(path), where or {}, path)
     thetas = sorted(ev["theta"].unique())
     bounds = "; ".join(f"theta = {t:g}: {_bounds(ev, t)}" for t in thetas)
-    return Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]), bounds=bounds,
-                  per_load="; ".join(f"{t:g}: {_bounds(ev, t)}" for t in thetas))
+    return _ratio_range(Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]), bounds=bounds,
+                               per_load="; ".join(f"{t:g}: {_bounds(ev, t)}" for t in thetas)), ev)
 
 
 def _select(d: "pd.DataFrame", where: dict[str, Any], path: Path) -> "pd.DataFrame":
@@ -264,18 +273,21 @@ def ladder_figure(table: "pd.DataFrame", out: str | os.PathLike) -> list[Path]:
             ax.errorbar(r["ratio"], yi, xerr=r["ratio_se"], fmt="o", color=c, capsize=3)
             ax.annotate(f"{r['ratio']:.3f} ± {r['ratio_se']:.3f}", (r["ratio"], yi), textcoords="offset points",
                         xytext=(0, 7), ha="center", fontsize=7, color=c)
-        elif np.isfinite(r["ratio_min"]) or np.isfinite(r["ratio_max"]):  # a range from undecided loads
+        elif (np.isfinite(r["ratio_min"]) and r["ratio_min"] > 0) or np.isfinite(r["ratio_max"]):  # a range from undecided loads
             a = r["ratio_min"] if np.isfinite(r["ratio_min"]) else 0.0
             b = r["ratio_max"] if np.isfinite(r["ratio_max"]) else 10.0
             ax.plot([a, b], [yi, yi], lw=4, alpha=0.5, color=c, solid_capstyle="butt")
-            ax.annotate(f"R in [{a:.2f}, {'inf' if b == 10.0 else f'{b:.2f}'}] (undecided load)", (min(a, 2.4), yi),
+            label = (f"R <= {b:.2f}" if a <= 0 else f"R >= {a:.2f}" if b == 10.0 else f"R in [{a:.2f}, {b:.2f}]")
+            ax.annotate(f"{label} (bounds from runs without a mu_max)", (max(min(a, 2.4), 0.47), yi),
                         textcoords="offset points", xytext=(0, 7), fontsize=7, color=c)
         else:
             text = r["bounds"] if isinstance(r["bounds"], str) and r["bounds"] else (r["note"] or "not measured")
             ax.text(0.47, yi, _short(text), fontsize=6.5, va="center", color="0.35")
     ax.axvline(1.0, color="0.5", lw=0.8)
     ax.axvline(0.8, color="0.5", lw=0.8, ls="--")
-    ax.set_yticks(y, [f"{r['rung']}\n({r['observable']})" for _, r in table.iterrows()], fontsize=7)
+    ax.set_yticks(y, [f"{r['rung']}\n({r['observable']}" + (f", theta {r['theta_min']:g}-{r['theta_max']:g})"
+                                                             if np.isfinite(r['theta_min']) else ")")
+                      for _, r in table.iterrows()], fontsize=7)
     finite = [v for v in table[["ratio", "ratio_min", "ratio_max"]].to_numpy().ravel() if np.isfinite(v)]
     ax.set_xlim(0.45, min(2.5, max([1.25] + [v + 0.1 for v in finite])))
     ax.set_ylim(-0.7, n - 0.3)
