@@ -202,3 +202,22 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
     wrong = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o")],
                            capture_output=True, text=True, timeout=120)
     assert wrong.returncode == 2 and "needs dead_weight" in wrong.stderr
+    # issue 29: grid stores side by side, one panel per value of a config key that one store does not
+    # vary (its base value) and the other leaves absent (the weight at once); their rows in evaluations.csv
+    _tiny_store(tmp_path / "dw2", {"dead_weight": [0.5, 1.05], "theta": [1.0, 0.5]},
+                base={"N": 3, "theta": 1 / 3, "delta": 0.0, "t_total": 4e-3, "dead_weight": 0.5, "t_ramp": 1e-3})
+    grid = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
+                                "--by", "t_ramp", "--out", str(tmp_path / "g")], capture_output=True, text=True, timeout=120)
+    assert grid.returncode == 0, grid.stderr
+    rows = pd.read_csv(tmp_path / "g" / "evaluations.csv")
+    assert len(rows) == 3 + 4 and rows.groupby("store")["t_ramp"].unique().map(list).to_dict() == {
+        "dw": ["absent"], "dw2": ["0.001"]}
+    stored = Store.open(tmp_path / "dw2")
+    for _, r in rows[rows["store"] == "dw2"].iterrows():  # each row is its member's own classification
+        attrs = stored.member_attrs(stored.find(theta=r["theta"], dead_weight=r["mu_a"]))
+        assert r["velocity_status"] == attrs["velocity_status"]
+    assert (tmp_path / "g" / "dead_weight_grid.png").stat().st_size > 5000
+    for bad, says in ((["--by", "t_rampp"], "'t_rampp' is not a config key"), ([], "several with --by")):
+        r = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
+                                 *bad, "--out", str(tmp_path / "g2")], capture_output=True, text=True, timeout=120)
+        assert r.returncode == 2 and says in r.stderr and not (tmp_path / "g2").exists(), r.stderr

@@ -149,13 +149,22 @@ def epsilon(
 
 @figure_app.command("dead-weight")
 def dead_weight(
-    store: Annotated[Path, typer.Option("--store", help="Store of a sweep over dead_weight (e.g. presets/dead-weight.toml).")],
+    store: Annotated[list[Path], typer.Option("--store", help="Store of a sweep over dead_weight (e.g. presets/dead-weight.toml); with --by, several.")],
     out_dir: OutOpt,
+    by: Annotated[Optional[str], typer.Option("--by", help="A config key (e.g. t_ramp): one panel per value, from grid stores (held runs at the left edge); writes evaluations.csv.")] = None,
 ) -> None:
     """Applied mu_star against the measured steady velocity per theta (runaways at the right edge)."""
     try:
-        wrote(_figures().dead_weight(store, out_dir))
-    except SweepError as e:
+        if by is None:
+            if len(store) > 1:
+                fail(f"--store given {len(store)} times; expected one store, or several with --by (e.g. --by t_ramp)")
+            wrote(_figures().dead_weight(store[0], out_dir))
+            return
+        paths, lines = _figures().dead_weight_grid(store, by, out_dir)
+        wrote(paths)
+        for line in lines:
+            out.print(line)
+    except (SweepError, ConfigError) as e:
         fail(str(e))
 
 

@@ -168,6 +168,51 @@ def plot_dead_weight(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     return save_figure(fig, out, "dead_weight")
 
 
+def plot_dead_weight_grid(ev: "pd.DataFrame", by: str, out: str | os.PathLike) -> list[Path]:
+    """Figs. 2-3 from a grid of dead-weight runs, one panel per value of ``by`` (e.g. the ramp t_ramp):
+    applied mu_a against the steady velocity the tester's analysis measured, per theta (each seed its
+    own line); runaways at the right edge (open triangles), runs held without a steady velocity by
+    t_max ('no-steady': creeping, or still ringing) at the left edge (crosses). ``ev``: the rows of
+    :func:`slipchain.workflows.dead_weight.store_evaluations`; runs that failed or did not run are
+    not drawn (the caller says how many)."""
+    plt = pyplot()
+    values = sorted(ev[by].unique(), key=lambda x: (isinstance(x, str), x if isinstance(x, str) else float(x)))
+    fig, axes = plt.subplots(1, len(values), figsize=(4.2 * len(values) + 1.4, 4.4), sharey=True, squeeze=False)
+    thetas = sorted(ev["theta"].unique())
+    colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))))
+    v = ev["velocity_m_s"].to_numpy(dtype=float)
+    v_ok = v[np.isfinite(v) & (ev["velocity_status"] == "ok").to_numpy()]
+    lo_edge, hi_edge = (v_ok.min() / 4, v_ok.max() * 4) if v_ok.size else (1e-7, 1e-3)
+    for ax, value in zip(axes[0], values):
+        cur = ev[ev[by] == value]
+        for th in thetas:
+            c = colors[th]
+            at = cur[np.isclose(cur["theta"], th)]
+            for _, g in at.groupby("seed"):
+                ok = g[g["velocity_status"] == "ok"].sort_values("mu_a")
+                if len(ok):
+                    ax.plot(ok["velocity_m_s"], ok["mu_a"], marker="o", color=c, ms=4)
+            run = at[at["velocity_status"] == "runaway"]
+            held = at[at["velocity_status"] == "no-steady"]
+            ax.plot(np.full(len(run), hi_edge), run["mu_a"], marker=">", ls="none", color=c, mfc="white")
+            ax.plot(np.full(len(held), lo_edge), held["mu_a"], marker="x", ls="none", color=c)
+        ax.set_xscale("log")
+        ax.set_xlim(lo_edge / 2, hi_edge * 2)
+        ax.set_xlabel("steady velocity (m/s)")
+        ax.set_title(f"{by} = {value:g}" if isinstance(value, (int, float, np.number)) else f"{by} = {value}",
+                     fontsize=9)
+    axes[0][0].set_ylabel(r"applied $\mu_a$ (dead weight)")
+    Line2D = plt.matplotlib.lines.Line2D
+    handles = [Line2D([], [], marker="o", ms=4, color=colors[th], label=rf"$\theta$ = {th:g}") for th in thetas]
+    handles += [Line2D([], [], marker=">", ls="none", color="0.3", mfc="white", label="runaway (right edge)"),
+                Line2D([], [], marker="x", ls="none", color="0.3", label="held, no steady\nvelocity (left edge)")]
+    fig.subplots_adjust(right=1.0 - 1.3 / fig.get_figwidth())
+    fig.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1.0 - 1.25 / fig.get_figwidth(), 0.5),
+               frameon=False)
+    fig.suptitle("Dead-weight runs read as the tester reads them: mu(v) per load", fontsize=10)
+    return save_figure(fig, out, "dead_weight_grid")
+
+
 def plot_epsilon(avg: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     """mu_star versus theta for each epsilon (the contact-force scale of eq. 1), from
     :func:`slipchain.analysis.statistics.epsilon_table`."""
@@ -185,4 +230,4 @@ def plot_epsilon(avg: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     return save_figure(fig, out, "epsilon")
 
 
-__all__ = ["plot_dead_weight", "plot_epsilon", "plot_mechanism", "plot_velocity"]
+__all__ = ["plot_dead_weight", "plot_dead_weight_grid", "plot_epsilon", "plot_mechanism", "plot_velocity"]

@@ -340,15 +340,20 @@ def evaluations_table(configs: list[Config], results: list[MuMax]) -> "pd.DataFr
     return _evaluation_rows([(c, e) for c, r in zip(configs, results) for e in r.evaluations], "bisection")
 
 
-def store_evaluations(store: str | os.PathLike) -> "pd.DataFrame":
+def store_evaluations(store: str | os.PathLike, columns: tuple[str, ...] = ()) -> "pd.DataFrame":
     """Every member of a sweep store over ``dead_weight`` as the rows of :func:`evaluations_table`
     (source 'sweep'): the tester's classification of each run, or its failure status (a member not
     run yet: 'error', 'not run'), with a column for each other parameter the sweep varies (e.g. the
-    ramp ``t_ramp`` of presets/ladder-eps1-slow-grid.toml)."""
+    ramp ``t_ramp`` of presets/ladder-eps1-slow-grid.toml) and for each config key in ``columns``
+    (e.g. ``t_ramp`` of a store that does not vary it, to be read beside one that does)."""
     from ..sweeps.store import Store
 
+    unknown = [c for c in columns if c not in Config.model_fields]
+    if unknown:
+        raise ConfigError(f"column {unknown[0]!r} is not a config key; expected one of the config's keys (e.g. t_ramp)")
     st = Store.open(store)  # member_attrs: None for a member not run yet, never an exception
     extra = [d for d in st.sweep.dims if d not in ("theta", "seed", "dead_weight")]
+    extra += [c for c in columns if c not in extra and c not in ("theta", "seed", "dead_weight")]
     return _evaluation_rows([(m.config, _evaluation(m.config.dead_weight, st.member_attrs(m))) for m in st.sweep.members],
                             "sweep", extra)
 

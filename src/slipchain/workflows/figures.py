@@ -15,7 +15,7 @@ from ..analysis.mechanism import velocity_figure_data
 from ..analysis.reports import epsilon_lines
 from ..analysis.statistics import epsilon_frame_table, epsilon_rows, epsilon_table
 from ..model.config import load_config
-from ..plots.mechanism import plot_dead_weight, plot_epsilon, plot_velocity
+from ..plots.mechanism import plot_dead_weight, plot_dead_weight_grid, plot_epsilon, plot_velocity
 from ..plots.paper import plot_fig5, plot_fig6
 from ..plots.tester import plot_model_vs_experiment
 from ..results.io import write_csv
@@ -129,6 +129,32 @@ def velocity(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
     return plot_dead_weight(sweep_dataset(store, {"dead_weight"}, "the dead-weight figure"), out)
+
+
+def _why(bad: pd.DataFrame) -> pd.Series:
+    """A failed run's status, or 'not run' for a member the store does not hold yet."""
+    return bad["velocity_status"].where(bad["message"] != "not run", "not run")
+
+
+def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.PathLike) -> tuple[list[Path], list[str]]:
+    """The dead-weight figure of one or more grid stores, one panel per value of the config key ``by``
+    (:func:`slipchain.plots.mechanism.plot_dead_weight_grid`; e.g. tester-16, its weight at once, beside
+    tester-16-slow's ramps); their rows (``store_evaluations``, with ``by`` and a ``store`` column) into
+    OUT/evaluations.csv. Returns the paths and a line per store saying how many runs were not drawn."""
+    from .dead_weight import store_evaluations
+
+    parts, lines = [], []
+    for st in stores:
+        ev = store_evaluations(st, (by,)).assign(store=Path(st).name)
+        ev[by] = ev[by].astype(object).where(ev[by].notna(), "absent")  # e.g. no ramp: the weight at once
+        bad = ev[~ev["velocity_status"].isin(["ok", "runaway", "no-steady"])]
+        if len(bad):
+            lines.append(f"{Path(st).name}: {len(bad)} of {len(ev)} runs not drawn "
+                         f"({', '.join(f'{k}: {n}' for k, n in _why(bad).value_counts().items())})")
+        parts.append(ev)
+    ev = pd.concat(parts, ignore_index=True)
+    paths = plot_dead_weight_grid(ev, by, out)
+    return paths + [write_csv(ev, Path(out) / "evaluations.csv")], lines
 
 
 def epsilon(store: str | os.PathLike | None, out: str | os.PathLike, *, more_stores: tuple = (),
