@@ -217,7 +217,19 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
         attrs = stored.member_attrs(stored.find(theta=r["theta"], dead_weight=r["mu_a"]))
         assert r["velocity_status"] == attrs["velocity_status"]
     assert (tmp_path / "g" / "dead_weight_grid.png").stat().st_size > 5000
-    for bad, says in ((["--by", "t_rampp"], "'t_rampp' is not a config key"), ([], "several with --by")):
+    # a table of such rows (a grid whose store is elsewhere) beside a store: read as it was written
+    rows[rows["store"] == "dw2"].drop(columns="store").to_csv(tmp_path / "dw2.csv", index=False)
+    mixed = subprocess.run(py + ["dead-weight", "--table", str(tmp_path / "dw2.csv"), "--store", str(tmp_path / "dw"),
+                                 "--by", "t_ramp", "--out", str(tmp_path / "g3")], capture_output=True, text=True, timeout=120)
+    assert mixed.returncode == 0, mixed.stderr
+    again = pd.read_csv(tmp_path / "g3" / "evaluations.csv")
+
+    def key(d):
+        return sorted(map(str, d[["theta", "seed", "t_ramp", "mu_a", "velocity_status", "velocity_m_s"]].itertuples(index=False)))
+    assert key(again) == key(rows) and set(again["store"]) == {"dw", "dw2.csv"}
+    rows.drop(columns="t_ramp").to_csv(tmp_path / "no_ramp.csv", index=False)
+    for bad, says in ((["--by", "t_rampp"], "'t_rampp' is not a config key"), ([], "several with --by"),
+                      (["--by", "t_ramp", "--table", str(tmp_path / "no_ramp.csv")], "has no column 't_ramp'")):
         r = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
                                  *bad, "--out", str(tmp_path / "g2")], capture_output=True, text=True, timeout=120)
         assert r.returncode == 2 and says in r.stderr and not (tmp_path / "g2").exists(), r.stderr

@@ -149,18 +149,23 @@ def epsilon(
 
 @figure_app.command("dead-weight")
 def dead_weight(
-    store: Annotated[list[Path], typer.Option("--store", help="Store of a sweep over dead_weight (e.g. presets/dead-weight.toml); with --by, several.")],
     out_dir: OutOpt,
+    store: Annotated[Optional[list[Path]], typer.Option("--store", help="Store of a sweep over dead_weight (e.g. presets/dead-weight.toml); with --by, several.")] = None,
     by: Annotated[Optional[str], typer.Option("--by", help="A config key (e.g. t_ramp): one panel per value, from grid stores (held runs at the left edge); writes evaluations.csv.")] = None,
+    table: Annotated[Optional[list[Path]], typer.Option("--table", help="With --by: a CSV of such runs (store_evaluations' rows with a column named by --by), beside the stores.")] = None,
 ) -> None:
     """Applied mu_star against the measured steady velocity per theta (runaways at the right edge)."""
     try:
         if by is None:
-            if len(store) > 1:
-                fail(f"--store given {len(store)} times; expected one store, or several with --by (e.g. --by t_ramp)")
+            if table:
+                fail("--table needs --by (e.g. --by t_ramp)")
+            if len(store or []) != 1:
+                fail(f"--store given {len(store or [])} times; expected one store, or several with --by (e.g. --by t_ramp)")
             wrote(_figures().dead_weight(store[0], out_dir))
             return
-        paths, lines = _figures().dead_weight_grid(store, by, out_dir)
+        if not store and not table:
+            fail("--by needs at least one --store or --table")
+        paths, lines = _figures().dead_weight_grid(store or [], by, out_dir, table or [])
         wrote(paths)
         for line in lines:
             out.print(line)

@@ -14,7 +14,7 @@ from ..analysis.fig6 import contact_law_dataset, fig6_figure_data
 from ..analysis.mechanism import velocity_figure_data
 from ..analysis.reports import epsilon_lines
 from ..analysis.statistics import epsilon_frame_table, epsilon_rows, epsilon_table
-from ..model.config import load_config
+from ..model.config import ConfigError, load_config
 from ..plots.mechanism import plot_dead_weight, plot_dead_weight_grid, plot_epsilon, plot_velocity
 from ..plots.paper import plot_fig5, plot_fig6
 from ..plots.tester import plot_model_vs_experiment
@@ -136,20 +136,32 @@ def _why(bad: pd.DataFrame) -> pd.Series:
     return bad["velocity_status"].where(bad["message"] != "not run", "not run")
 
 
-def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.PathLike) -> tuple[list[Path], list[str]]:
+def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.PathLike,
+                     tables: list[str | os.PathLike] = ()) -> tuple[list[Path], list[str]]:
     """The dead-weight figure of one or more grid stores, one panel per value of the config key ``by``
     (:func:`slipchain.plots.mechanism.plot_dead_weight_grid`; e.g. tester-16, its weight at once, beside
     tester-16-slow's ramps); their rows (``store_evaluations``, with ``by`` and a ``store`` column) into
-    OUT/evaluations.csv. Returns the paths and a line per store saying how many runs were not drawn."""
+    OUT/evaluations.csv. ``tables``: CSVs of such rows (e.g. a grid whose store is elsewhere), each
+    with a ``by`` column. Returns the paths and a line per source saying how many runs were not drawn.
+    ConfigError (nothing written) for a key that is not a config key or a table without its column."""
     from .dead_weight import store_evaluations
 
+    sources = []
+    for t in tables:
+        d = pd.read_csv(t)
+        missing = [c for c in (by, "theta", "seed", "mu_a", "velocity_status", "velocity_m_s") if c not in d.columns]
+        if missing:
+            raise ConfigError(f"table {os.fspath(t)!r} has no column {missing[0]!r}; expected the rows of "
+                              f"store_evaluations with a column {by!r} (the value its runs had)")
+        sources.append((Path(t).name, d.assign(message=d.get("message", pd.Series("", index=d.index)).fillna(""))))
+    sources += [(Path(st).name, store_evaluations(st, (by,))) for st in stores]
     parts, lines = [], []
-    for st in stores:
-        ev = store_evaluations(st, (by,)).assign(store=Path(st).name)
+    for name, ev in sources:
+        ev = ev.assign(store=name)
         ev[by] = ev[by].astype(object).where(ev[by].notna(), "absent")  # e.g. no ramp: the weight at once
         bad = ev[~ev["velocity_status"].isin(["ok", "runaway", "no-steady"])]
         if len(bad):
-            lines.append(f"{Path(st).name}: {len(bad)} of {len(ev)} runs not drawn "
+            lines.append(f"{name}: {len(bad)} of {len(ev)} runs not drawn "
                          f"({', '.join(f'{k}: {n}' for k, n in _why(bad).value_counts().items())})")
         parts.append(ev)
     ev = pd.concat(parts, ignore_index=True)
