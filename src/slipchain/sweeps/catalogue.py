@@ -68,7 +68,7 @@ CATALOGUE: dict[str, Study] = {
                          "the ladder's epsilon = 1 rung: mu_max on the chain under a dead weight (200-ms ramp)"),
     "ladder-eps1-slow": Study("plan", 27, "47 min", "docs/ladder/index.md",
                               "the epsilon = 1 rung loaded ten times more slowly (2-s ramp, runs of 5 s)"),
-    "ladder-eps1-slow-grid": Study("study", 122, "2- and 6-s ramps 35 min; 20-s ramps ~2 h (est.)", "docs/ladder/index.md",
+    "ladder-eps1-slow-grid": Study("study", 122, "2- and 6-s ramps 35 min; 20-s ramps ~5 h (510-880 s per run decided at 20.5 s)", "docs/ladder/index.md",
                                    "the epsilon = 1 rung's weights held or run away with 2-, 6- and 20-s ramps"),
     "ladder-slab": Study("plan", 40, "40 min", "docs/ladder/index.md",
                          "the ladder's slab rung: mu_max on a 16 x 16 elastic slab, epsilon = 1"),
