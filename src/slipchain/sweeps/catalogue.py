@@ -82,6 +82,8 @@ CATALOGUE: dict[str, Study] = {
                            "tester-16's lowest load at dt = 5e-8 s"),
     "tester-16-slow": Study("study", 25, "est. ~1 h", "docs/tester-3d/index.md",
                             "tester-16 in the slow-loading limit: the weight raised over 1 s and 3 s (the implicit step)"),
+    "tester-16-slower": Study("study", 24, "not run yet (est. 2-3 h)", "docs/tester-3d/index.md",
+                              "tester-16-slow at heavier weights and a 6-s ramp: where the slowly loaded block runs away"),
     "tester-16-11c": Study("study", 15, "about 420 s on 16 CPUs", "docs/tester-3d/index.md",
                            "tester-16 at Fig. 3's 11 °C (theta 0.2, 0.5, 1; five weights)"),
     "tester-128": Study("plan", 72, "not run (est. ~700 core-hours: a cluster's job)", "docs/tester-3d/index.md",
