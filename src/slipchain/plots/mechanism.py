@@ -194,10 +194,11 @@ def plot_dead_weight_grid(ev: "pd.DataFrame", by: str, out: str | os.PathLike) -
                     ax.plot(ok["velocity_m_s"], ok["mu_a"], marker="o", color=c, ms=4)
             run = at[at["velocity_status"] == "runaway"]
             held = at[at["velocity_status"] == "no-steady"]
-            ax.plot(np.full(len(run), hi_edge), run["mu_a"], marker=">", ls="none", color=c, mfc="white")
-            ax.plot(np.full(len(held), lo_edge), held["mu_a"], marker="x", ls="none", color=c)
+            step = 1.3 ** thetas.index(th)  # each load its own column at the edges (markers would hide each other)
+            ax.plot(np.full(len(run), hi_edge * step), run["mu_a"], marker=">", ls="none", color=c, mfc="white")
+            ax.plot(np.full(len(held), lo_edge / step), held["mu_a"], marker="x", ls="none", color=c)
         ax.set_xscale("log")
-        ax.set_xlim(lo_edge / 2, hi_edge * 2)
+        ax.set_xlim(lo_edge / 1.3 ** len(thetas), hi_edge * 1.3 ** len(thetas))
         ax.set_xlabel("steady velocity (m/s)")
         ax.set_title(f"{by} = {value:g}" if isinstance(value, (int, float, np.number)) else f"{by} = {value}",
                      fontsize=9)
