@@ -104,6 +104,8 @@ def test_a_grid_of_runs_over_several_ramps_is_read_one_ramp_at_a_time(tmp_path):
     assert slow.bounds == "theta = 0.5: steady up to mu_a = 0.75, runaway from mu_a = 0.85"
     # one load is both ends: R in [0.75/0.85, 0.85/0.75]
     assert (slow.ratio_min, slow.ratio_max) == (pytest.approx(0.75 / 0.85), pytest.approx(0.85 / 0.75))
+    # no runaway at one load: that end of the range stays open (NaN, as a mu-max rung's), never inf
+    assert math.isnan(effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 20.0, "mu_a": 0.75}).ratio_max)
     fast = effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 2.0})
     assert fast.bounds == "theta = 0.5: runaway from mu_a = 0.75, no-steady at mu_a = 0.65"
     both = effect_of_evaluations(tmp_path / "g.csv")

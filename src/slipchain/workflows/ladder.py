@@ -143,7 +143,7 @@ def _ratio_range(e: Effect, ev: "pd.DataFrame") -> Effect:
     (l0, l1), (h0, h1) = ((_interval(ev, t) if not np.isfinite(v) else (v, v))
                           for t, v in ((e.theta_min, e.low), (e.theta_max, e.high)))
     e.ratio_min = h0 / l1 if l1 > 0 else math.nan
-    e.ratio_max = h1 / l0 if l0 > 0 else math.nan
+    e.ratio_max = h1 / l0 if l0 > 0 and np.isfinite(h1) else math.nan
     return e
 
 
