@@ -80,7 +80,7 @@ CATALOGUE: dict[str, Study] = {
                        "the tester's protocol on a 16 x 16 interface: rubber, H = 50 a, its top, the weight at once"),
     "tester-16-low": Study("study", 4, "22 min", "docs/tester-3d/index.md",
                            "tester-16's lowest load at dt = 5e-8 s"),
-    "tester-16-slow": Study("study", 25, "est. ~1 h", "docs/tester-3d/index.md",
+    "tester-16-slow": Study("study", 25, "1 h 44 min", "docs/tester-3d/index.md",
                             "tester-16 in the slow-loading limit: the weight raised over 1 s and 3 s (the implicit step)"),
     "tester-16-slower": Study("study", 24, "not run yet (est. 2-3 h)", "docs/tester-3d/index.md",
                               "tester-16-slow at heavier weights and a 6-s ramp: where the slowly loaded block runs away"),
