@@ -244,9 +244,12 @@ def round_sweep(configs: list[Config], name: str = "mu-max-round") -> SweepDefin
     return sweep
 
 
+NOT_RUN = "not run"  # the message of an evaluation whose member the store does not hold yet
+
+
 def _evaluation(mu_a: float, attrs: Mapping[str, Any] | None) -> Evaluation:
     """An evaluation from a run's attributes (the Dataset of :func:`run`, or a stored member's)."""
-    a = attrs or {"status": "error", "message": "not run"}
+    a = attrs or {"status": "error", "message": NOT_RUN}
     status = str(a.get("status", Status.ERROR))
     if status != Status.COMPLETED:  # failed or interrupted: its own status stops the bisection
         return Evaluation(float(mu_a), status, float("nan"), str(a.get("message", "")))
@@ -352,8 +355,7 @@ def store_evaluations(store: str | os.PathLike, columns: tuple[str, ...] = ()) -
     if unknown:
         raise ConfigError(f"column {unknown[0]!r} is not a config key; expected one of the config's keys (e.g. t_ramp)")
     st = Store.open(store)  # member_attrs: None for a member not run yet, never an exception
-    extra = [d for d in st.sweep.dims if d not in ("theta", "seed", "dead_weight")]
-    extra += [c for c in columns if c not in extra and c not in ("theta", "seed", "dead_weight")]
+    extra = [d for d in dict.fromkeys([*st.sweep.dims, *columns]) if d not in ("theta", "seed", "dead_weight")]
     return _evaluation_rows([(m.config, _evaluation(m.config.dead_weight, st.member_attrs(m))) for m in st.sweep.members],
                             "sweep", extra)
 
@@ -525,7 +527,7 @@ def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float
     return float(f[i]), float(u[i])
 
 
-__all__ = ["BRACKET", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "Rounds",
+__all__ = ["BRACKET", "NOT_RUN", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "Rounds",
            "evaluate", "evaluate_many", "round_sweep",
            "evaluations_table", "load_plan", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table", "plan_toml",
            "run_plan", "single_contact_maximum"]

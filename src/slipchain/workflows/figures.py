@@ -133,7 +133,9 @@ def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 def _why(bad: pd.DataFrame) -> pd.Series:
     """A failed run's status, or 'not run' for a member the store does not hold yet."""
-    return bad["velocity_status"].where(bad["message"] != "not run", "not run")
+    from .dead_weight import NOT_RUN
+
+    return bad["velocity_status"].where(bad["message"] != NOT_RUN, NOT_RUN)
 
 
 def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.PathLike,
