@@ -69,6 +69,10 @@ CASES = {
     # ... and on the slab (Newton with conjugate gradients; its controller carried across samples and chunks)
     "implicit slab": dict(N=8, Ly=8, geometry="slab", theta=1.0, integrator="implicit", dt=1e-7, epsilon=1.0,
                           start="steady", t_total=0.03, output_interval=1e-3, seed=3),
+    # ... with the additive preconditioner at a load that leaves blocks free of contacts (where it acts)
+    "implicit slab, additive": dict(N=8, Ly=8, geometry="slab", theta=0.25, integrator="implicit", dt=1e-7,
+                                    epsilon=1.0, start="steady", t_total=0.03, output_interval=1e-3, seed=3,
+                                    krylov_preconditioner="additive"),
 }
 SAVES = {"dead weight, automatic length": 60}
 

@@ -32,6 +32,10 @@ ALLOWED: dict[str, str] = {
                   "'implicit' (the adaptive step, and backward Euler through creep above the stable step; issue 27)",
     "step_tol": "a number > 0 (integrator = 'adaptive' or 'implicit': largest local velocity error per step, in "
                 "units of v_d)",
+    "krylov_preconditioner": "one of 'jacobi' (the default: the diagonal), 'additive' (by site: the diagonal on "
+                             "the contact blocks, the body's exact Fourier inverse on the free ones; fewer conjugate-"
+                             "gradient iterations at low load, each dearer), only with integrator = 'implicit' on the "
+                             "slab or half-space",
     "min_cycles": "an integer >= 0 (automatic length: slip cycles the steady window must hold; 0 for none)",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
     "c": "a number >= 0",
@@ -87,8 +91,9 @@ LEGACY_KEYS: dict[str, str] = {
 # integrator: 'fixed' was the default until issue 26 made it 'adaptive'; a stored config or store
 # without the key ran with the fixed step and keeps that meaning.
 # t_max_cycles: 0 (no extension past t_max) until issue 26 made the automatic length follow slip cycles.
+# krylov_preconditioner: 'jacobi', the implicit stepper's only preconditioner on the slab before it existed.
 OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0,
-                       "t_max_cycles": 0.0, "material": "elastic"}
+                       "t_max_cycles": 0.0, "material": "elastic", "krylov_preconditioner": "jacobi"}
 _NOT_OFF = object()
 
 # The adaptive step's largest step stays below this fraction of the stable step (Config.dt_stable).
@@ -140,6 +145,9 @@ class Config(BaseModel):
     the step bounded by ``step_tol`` and the output samples alone, up to dt 2**24:
     :mod:`slipchain.engine.backends.implicit`; every geometry and material: with 'prony' the Maxwell
     arms are in the backward-Euler system and the explicit steps are the fold step at dt);
+    ``krylov_preconditioner`` (integrator = 'implicit' on the slab and half-space): 'jacobi' (the
+    default) or 'additive', the conjugate gradients' preconditioner in each backward-Euler solve
+    (:meth:`slipchain.engine.backends.implicit.SlabSystem.precondition`);
     ``dt`` absent: :attr:`default_dt`; every dt must lie below :attr:`dt_stable`;
     ``min_cycles``: the automatic length also needs this many cycles of f_d in its steady window
     (:class:`slipchain.engine.control.UntilConverged`; for the long slip cycles at epsilon = 1);
@@ -178,6 +186,7 @@ class Config(BaseModel):
     Ly: int = Field(1, ge=1)
     integrator: Literal["fixed", "fold", "adaptive", "implicit"] = "adaptive"
     step_tol: float = Field(0.01, gt=0)
+    krylov_preconditioner: Literal["jacobi", "additive"] = "jacobi"
     min_cycles: int = Field(0, ge=0)
 
     dt: float = Field(2e-8, gt=0)  # absent from the input: Config.default_dt (the 2e-8 is never used)
@@ -271,6 +280,12 @@ class Config(BaseModel):
         if self.integrator not in ("adaptive", "implicit") and self.step_tol != OFF["step_tol"]:
             raise ValueError(_message("step_tol", self.step_tol, "absent unless integrator = 'adaptive' or 'implicit' "
                                       "(it is the adaptive step's tolerance)"))
+        if self.krylov_preconditioner != OFF["krylov_preconditioner"] and (
+                self.integrator != "implicit" or self.geometry not in ("slab", "halfspace")):
+            raise ValueError(_message("krylov_preconditioner", self.krylov_preconditioner, "absent (or 'jacobi') unless "
+                                      "integrator = 'implicit' with geometry = 'slab' or 'halfspace' (it preconditions "
+                                      "their backward-Euler solves; here integrator = "
+                                      f"'{self.integrator}', geometry = '{self.geometry}')"))
         if self.t_max_cycles and (self.t_total is not None or self.dead_weight is not None
                                   or not self.t_max_cycles > self.t_max):
             raise ValueError(_message("t_max_cycles", self.t_max_cycles, f"more than t_max = {self.t_max:g}, and 0 "

@@ -59,6 +59,9 @@ class Batch:
     # material 'prony' on the slab under the drive springs: (B, 6, Lx, Ly//2 + 1), the slab's two-port
     # (model.elastic.twoport_kernel), whose top is then a state of its own (State.top); else None
     twoport: np.ndarray | None = None
+    # integrator = 'implicit' on the slab and half-space: the conjugate gradients' preconditioner
+    # (Config.krylov_preconditioner, one per batch; :meth:`.implicit.SlabSystem.precondition`)
+    preconditioner: str = "jacobi"
 
     @property
     def implicit(self) -> bool:
@@ -82,6 +85,8 @@ class Batch:
         n_terms = {len(s.config.prony_E or ()) for s in systems}
         if len(n_terms) > 1 or {s.config.material for s in systems} != {c0.material}:
             raise ValueError("a batch needs one material and as many Prony terms in every row")
+        if {s.config.krylov_preconditioner for s in systems} != {c0.krylov_preconditioner}:
+            raise ValueError("a batch needs one krylov_preconditioner in every row")
         b = len(systems)
         cmax = max(1, max(s.n_contacts for s in systems))
         params = np.zeros((b, S.N_PARAMS))
@@ -159,6 +164,7 @@ class Batch:
             material=material,
             carry=np.zeros((b, N_CARRY + 2 * n) if c0.integrator == "implicit" else (b, 0)),
             twoport=np.stack([twoport_kernel(s.config) for s in systems]) if top else None,
+            preconditioner=c0.krylov_preconditioner,
         )
 
     def state(self, row: int) -> State:

@@ -73,7 +73,7 @@ MIN_GAIN = 3
 # operator applications that varies by orders of magnitude (each conjugate-gradient iteration one FFT pair),
 # so whether it pays is counted, not guessed from its level: in units of one explicit step (one FFT pair
 # and the Python around it), a try costs KRYLOV_TRY_UNITS plus one per Newton and per conjugate-gradient
-# iteration (calibrated on a 16 x 16 slab, this project's 2-core machine: a try 2.4 ms, an explicit step
+# iteration, two with krylov_preconditioner = 'additive', whose inverse is a second FFT pair (calibrated on a 16 x 16 slab, this project's 2-core machine: a try 2.4 ms, an explicit step
 # 54 us, a conjugate-gradient iteration about as much). An accepted implicit step whose tries since the last
 # one cost more units than the explicit steps at the explicit top that would cover its base steps (one per
 # 2**top base steps), and that the controller does not step up from, hands back to the explicit steps,
@@ -646,10 +646,10 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
         dead = p[P_KD] == 0.0  # the dead weight: the slab's body acts on x - X (the plate's displacement in every entry)
         arms = implicit.Arms(batch.material[row], batch.bstate[row]) if prony else None
         if top is not None:
-            system = implicit.TopSlabSystem(p, arms, top, row)
+            system = implicit.TopSlabSystem(p, arms, top, row, batch.preconditioner)
         elif spectral_body:
             op = implicit.SpectralOperator(batch.kernel[row], batch.shape, fft)
-            system = implicit.SlabSystem(op, p, arms)
+            system = implicit.SlabSystem(op, p, arms, batch.preconditioner)
         else:
             system = implicit.LatticeSystem(p, batch.shape, fft, arms)
         xr, ur, Xr, Ur = batch.x[row], batch.u[row], batch.X[row], batch.U[row]
@@ -699,7 +699,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                     top.solve()  # start (after explicit steps; a solve at the step of the last one changes nothing)
                 its, n_cg = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra,
                                                    rk, ap, cr[CT_HAVE] > 0)
-                spent += KRYLOV_TRY_UNITS + abs(its) + n_cg
+                spent += KRYLOV_TRY_UNITS + abs(its) + n_cg * system.cg_units
                 err = _error(n, ur, Ur, un, Un, ap, h) if its > 0 and cr[CT_HAVE] > 0 else 0.0
                 bal = scale = fsum = w_drive = w_damp = w_contact = w_visc = 0.0
                 if its > 0 and err <= ctrl[0]:
