@@ -73,8 +73,9 @@ MIN_GAIN = 3
 # operator applications that varies by orders of magnitude (each conjugate-gradient iteration one FFT pair),
 # so whether it pays is counted, not guessed from its level: in units of one explicit step (one FFT pair
 # and the Python around it), a try costs KRYLOV_TRY_UNITS plus one per Newton and per conjugate-gradient
-# iteration, two with krylov_preconditioner = 'additive', whose inverse is a second FFT pair (calibrated on a 16 x 16 slab, this project's 2-core machine: a try 2.4 ms, an explicit step
-# 54 us, a conjugate-gradient iteration about as much). An accepted implicit step whose tries since the last
+# iteration (two with krylov_preconditioner = 'additive', whose inverse is a second FFT pair; calibrated
+# on a 16 x 16 slab, this project's 2-core machine: a try 2.4 ms, an explicit step 54 us, a
+# conjugate-gradient iteration about as much). An accepted implicit step whose tries since the last
 # one cost more units than the explicit steps at the explicit top that would cover its base steps (one per
 # 2**top base steps), and that the controller does not step up from, hands back to the explicit steps,
 # which then wait 1, 2, 4, ... MAX_BACKOFF explicit steps (doubling within a sample) before the next try.

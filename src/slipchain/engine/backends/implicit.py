@@ -682,7 +682,6 @@ class SlabSystem:
             return w
         return np.concatenate([w - self.bp * v[n], [n * self.ap * v[n] - self.bp * np.sum(v[:n])]])
 
-
     def _preconditioner(self, name: str) -> None:
         if name not in ("jacobi", "additive"):
             raise ValueError(f"preconditioner {name!r}: expected 'jacobi' or 'additive'")
