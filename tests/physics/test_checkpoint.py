@@ -188,7 +188,7 @@ def test_a_dead_weight_run_keeps_one_contact_record_bit_for_bit_and_resumes_from
     from slipchain.engine import observers
 
     simulate = importlib.import_module("slipchain.engine.simulate")  # the module (the package exports a function)
-    cfg = dict(N=31, theta=0.5, dead_weight=0.7, t_ramp=2e-3, t_total=4e-3, output_interval=1e-5, seed=1)
+    cfg = dict(N=31, theta=0.5, dead_weight=0.7, t_ramp=3e-4, t_total=6e-4, output_interval=1e-5, seed=1)
     reference = run(cfg)
 
     class PerChunk(observers.Recorder):  # the recorder as it was: a record per chunk for every run
@@ -198,18 +198,18 @@ def test_a_dead_weight_run_keeps_one_contact_record_bit_for_bit_and_resumes_from
     with monkeypatch.context() as m:
         m.setattr(simulate, "Recorder", PerChunk)
         _same(reference, run(cfg))
-        _crash_after(m, 120)  # within the ramp (200 one-sample chunks)
+        _crash_after(m, 20)  # within the ramp (30 one-sample chunks)
         old = tmp_path / "old.nc"
         with pytest.raises(Crash):
             run(cfg, checkpoint=old, checkpoint_every=0)
     with xr.open_dataset(old) as ds:
-        assert ds.sizes["chunk_0"] == 120
+        assert ds.sizes["chunk_0"] == 20
     _same(reference, run(cfg, checkpoint=old, checkpoint_every=0))
     new = tmp_path / "new.nc"
     with monkeypatch.context() as m:
-        _crash_after(m, 120)
+        _crash_after(m, 20)
         with pytest.raises(Crash):
             run(cfg, checkpoint=new, checkpoint_every=0)
     with xr.open_dataset(new) as ds:
-        assert ds.sizes["chunk_0"] == 1 and int(ds["rec_chunk_samples_0"].values[0]) == 120
+        assert ds.sizes["chunk_0"] == 1 and int(ds["rec_chunk_samples_0"].values[0]) == 20
     _same(reference, run(cfg, checkpoint=new, checkpoint_every=0))
