@@ -181,6 +181,28 @@ def test_automatic_dead_weight_length_runs_on_while_the_velocity_drifts():
     assert b["velocity_status"] == "runaway" and b["t_total"] == pytest.approx(cfg.t_decide, abs=6e-4)
 
 
+def test_a_runaway_still_accelerating_beyond_the_branch_is_decided_at_t_decide():
+    """Without contact damping (eta_c = 0) a runaway never stops accelerating: at t_decide its fit is
+    not steady, but it is already beyond the rising branch (faster than RUNAWAY_FACTOR v0 10**delta),
+    where under the constant load it cannot come back (schema.accelerating_beyond_branch). The
+    automatic length stops there, and the same run to t_max (fixed length) is a runaway too, faster
+    still; a slider below the branch at t_decide is not stopped by this rule (the drifting run above)."""
+    from slipchain import run
+    from slipchain.results.schema import RUNAWAY_FACTOR
+
+    cfg = make_config(**AUTO, dead_weight=1.2, eta_c=0.0)
+    a = run(cfg, progress=False)
+    assert a.attrs["velocity_status"] == "runaway" and "still rises" in a.attrs["velocity_reason"]
+    assert float(a.attrs["t_total"]) == pytest.approx(cfg.t_decide, abs=6e-4)
+    t, X = a["time"].values, a["X_mean"].values
+    last = t >= t[-1] - 0.1 * (t[-1] - 0.25 * cfg.t_decide)
+    assert np.diff(X[last]).sum() / np.diff(t[last]).sum() > RUNAWAY_FACTOR * cfg.v0 * 10.0 ** cfg.delta
+    full = run(make_config(**{k: v for k, v in AUTO.items() if k not in ("t_decide", "t_max")}, dead_weight=1.2,
+                           eta_c=0.0, t_total=cfg.t_max, t_ramp=0.25 * cfg.t_decide), progress=False)
+    assert full.attrs["velocity_status"] == "runaway"
+    assert np.array_equal(full["X_mean"].values[:X.size], X)  # the same run up to the early stop
+
+
 def test_automatic_dead_weight_length_stops_at_t_max_with_no_steady_and_the_drift():
     from slipchain import run
 

@@ -20,7 +20,7 @@ import numpy as np
 from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import count_cycles, steady_estimate, window_velocity
-from ..results.schema import Status, after_ramp, dead_weight_velocity, velocity_decided
+from ..results.schema import Status, accelerating_beyond_branch, after_ramp, dead_weight_velocity, velocity_decided
 from . import scheme as S
 
 DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace each time it has grown by 2 %
@@ -156,7 +156,8 @@ class UntilDecided:
     (:func:`~slipchain.results.schema.dead_weight_velocity`, the tester's algorithm). The run stops
     once it is decided (:func:`~slipchain.results.schema.velocity_decided`): steady with a velocity
     change across the window of at most DECIDE_DRIFT, or a runaway beyond the rising branch (faster
-    than RUNAWAY_FACTOR*v0*10**delta). While the slider still accelerates or slows down it goes on,
+    than RUNAWAY_FACTOR*v0*10**delta: sliding steadily there, or still accelerating beyond it,
+    :func:`~slipchain.results.schema.accelerating_beyond_branch`). While the slider still accelerates or slows down it goes on,
     at most ``t_max``; there a tester's ``ok`` that still drifts becomes ``no-steady``, with the
     drift in its reason, and an accelerating slider stays ``runaway``."""
 
@@ -175,7 +176,8 @@ class UntilDecided:
         X = np.concatenate(self.X_mean)
         after = after_ramp(self.system.config, time)
         status, _, fit = dead_weight_velocity(self.system, time[after], X[after])
-        self.reached = velocity_decided(status, fit)
+        self.reached = velocity_decided(status, fit) or accelerating_beyond_branch(self.system, time[after], X[after],
+                                                                                  fit)
         return self.reached
 
     def _check_index(self, n: int) -> int:

@@ -329,12 +329,31 @@ def velocity_decided(status: str, fit: VelocityFit | None) -> bool:
     """The dead-weight automatic length's stop rule (config ``t_decide``): the tester's ``ok`` with
     a velocity change across the steady window of at most DECIDE_DRIFT (the tester alone accepts
     any change that is not significant, which a short, noisy record allows), or a slider that
-    slides beyond the rising branch (``runaway`` with a steady fit)."""
+    slides beyond the rising branch (``runaway`` with a steady fit; still accelerating beyond it:
+    :func:`accelerating_beyond_branch`)."""
     if fit is None:
         return False
     if status == VelocityStatus.OK:
         return abs(fit.change) <= DECIDE_DRIFT
     return status == VelocityStatus.RUNAWAY and fit.status == VelocityStatus.OK
+
+
+def accelerating_beyond_branch(system: System, time: np.ndarray, X_mean: np.ndarray, fit: VelocityFit | None) -> bool:
+    """The dead-weight automatic length's early runaway: the tester's fit says the slider still
+    accelerates (``runaway`` without a steady window) and its mean velocity over the last tenth of the
+    trace after the ramp is already beyond the rising branch (faster than RUNAWAY_FACTOR*v0*10**delta).
+    Under the constant load after the ramp such a slider cannot come back: there eq. (1)'s forces are
+    far below the load, and it accelerates until the contact damping m*eta_c*u alone balances it. Its
+    classification at t_max would be ``runaway`` too (still accelerating, or steady beyond the branch),
+    so the run stops here (on the tester's block a runaway's fast sliding cost most of a run)."""
+    if fit is None or fit.status != VelocityStatus.RUNAWAY or time.size < 20:
+        return False
+    cfg = system.config
+    last = time >= time[0] + 0.9 * (time[-1] - time[0])
+    if last.sum() < 2:
+        return False
+    tl, xl = time[last], X_mean[last]
+    return bool((xl[-1] - xl[0]) / (tl[-1] - tl[0]) > RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta)
 
 
 def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> dict[str, Any]:
@@ -385,7 +404,7 @@ def summary(ds: xr.Dataset) -> dict[str, Any]:
 
 
 __all__ = ["DECIDE_DRIFT", "RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
-           "Status", "after_ramp", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
+           "Status", "accelerating_beyond_branch", "after_ramp", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
 
 if __name__ == "__main__":  # pragma: no cover - regenerates docs/run-schema.md
     print(schema_markdown(), end="")
