@@ -116,6 +116,32 @@ def test_a_grid_of_runs_over_several_ramps_is_read_one_ramp_at_a_time(tmp_path):
         effect_of_evaluations(tmp_path / "g.csv", {"t_ramp": 6.0})
 
 
+def test_an_evaluations_rung_reads_several_csvs_as_one(tmp_path):
+    """A grid continued by a second preset (tester-16-slow's 3-s ramp, then tester-16-slower's heavier
+    weights): ``source`` may list both; the bounds and R's range are those of their rows together.
+    A list is refused for other kinds, naming the key."""
+    pd.DataFrame([
+        {"theta": 0.05, "seed": 0, "t_ramp": 3.0, "mu_a": 0.95, "velocity_status": "ok", "velocity_m_s": 1e-4},
+        {"theta": 1.0, "seed": 0, "t_ramp": 3.0, "mu_a": 0.95, "velocity_status": "ok", "velocity_m_s": 2e-4},
+    ]).to_csv(tmp_path / "a.csv", index=False)
+    pd.DataFrame([
+        {"theta": 0.05, "seed": 0, "t_ramp": 3.0, "mu_a": 1.15, "velocity_status": "runaway"},
+        {"theta": 1.0, "seed": 0, "t_ramp": 3.0, "mu_a": 1.05, "velocity_status": "runaway"},
+    ]).to_csv(tmp_path / "b.csv", index=False)
+    assert math.isnan(effect_of_evaluations(tmp_path / "a.csv").ratio_max)  # alone: no runaway, R unbounded above
+    both = effect_of_evaluations([tmp_path / "a.csv", tmp_path / "b.csv"], {"t_ramp": 3.0})
+    # theta = 1 in [0.95, 1.05), theta = 0.05 in [0.95, 1.15): R in [0.95/1.15, 1.05/0.95]
+    assert (both.ratio_min, both.ratio_max) == (pytest.approx(0.95 / 1.15), pytest.approx(1.05 / 0.95))
+    ladder = tmp_path / "l.toml"
+    rung = '[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "{kind}"\nsource = ["a.csv", "b.csv"]\n'
+    ladder.write_text(rung.format(kind="evaluations"))
+    row = ladder_table(ladder).iloc[0]
+    assert row["ratio_max"] == pytest.approx(1.05 / 0.95) and row["source"] == "a.csv; b.csv"
+    ladder.write_text(rung.format(kind="table"))
+    with pytest.raises(ConfigError, match=r"'source' has value \['a.csv', 'b.csv'\]; expected a path, or a list"):
+        load_ladder(ladder)
+
+
 def test_a_bad_ladder_file_names_the_rung_key_and_value(tmp_path):
     bad = tmp_path / "l.toml"
     bad.write_text('[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "guess"\nsource = "x"\n')

@@ -52,7 +52,7 @@ class Rung:
     adds: str
     observable: str  # 'mu_max' (dead weight) or 'mu_star at v_d1' (spring drive)
     kind: str
-    source: str = ""  # a path relative to the ladder file
+    source: str | tuple[str, ...] = ""  # a path relative to the ladder file (kind 'evaluations': one or several)
     where: dict[str, Any] = field(default_factory=dict)
     note: str = ""
 
@@ -89,10 +89,16 @@ def load_ladder(path: str | os.PathLike) -> list[Rung]:
             raise ConfigError(f"{where}: " + _message("kind", r["kind"], " or ".join(repr(k) for k in KINDS)))
         if r["kind"] != "none" and not r.get("source"):
             raise ConfigError(f"{where}: " + _message("source", r.get("source"), f"a path (kind = {r['kind']!r})"))
+        source = r.get("source", "")
+        if isinstance(source, list):  # several CSVs of runs read as one (e.g. a grid continued by a second preset)
+            if r["kind"] != "evaluations" or not source or not all(isinstance(s, str) and s for s in source):
+                raise ConfigError(f"{where}: " + _message("source", source, "a path, or a list of paths with kind = "
+                                                          "'evaluations'"))
+            source = tuple(source)
         unknown = set(r) - {"name", "adds", "observable", "kind", "source", "where", "note"}
         if unknown:
             raise ConfigError(f"{where}: unknown key(s) {sorted(unknown)}")
-        rungs.append(Rung(r["name"], r["adds"], r["observable"], r["kind"], r.get("source", ""),
+        rungs.append(Rung(r["name"], r["adds"], r["observable"], r["kind"], source,
                           dict(r.get("where", {})), r.get("note", "")))
     if not rungs:
         raise ConfigError(f"ladder {os.fspath(path)!r}: " + _message("rung", None, "at least one [[rung]] table"))
@@ -178,14 +184,16 @@ def _bounds(ev: "pd.DataFrame", theta: float) -> str:
     return ", ".join(parts) if parts else "no runs"
 
 
-def effect_of_evaluations(path: Path, where: dict[str, Any] | None = None) -> Effect:
-    """A CSV of dead-weight runs, its rows chosen by ``where`` (column = value, as a table's: e.g. one
-    ramp ``t_ramp`` of a sweep over several): the bounds on mu_max at every load (module docstring)
-    and the range of R they allow between the smallest and the largest load (:func:`_ratio_range`;
-    held but not steady runs bound nothing), no ratio."""
+def effect_of_evaluations(path: Path | list[Path], where: dict[str, Any] | None = None) -> Effect:
+    """A CSV of dead-weight runs (or several, read as one), its rows chosen by ``where`` (column =
+    value, as a table's: e.g. one ramp ``t_ramp`` of a sweep over several): the bounds on mu_max at
+    every load (module docstring) and the range of R they allow between the smallest and the largest
+    load (:func:`_ratio_range`; held but not steady runs bound nothing), no ratio."""
     import pandas as pd
 
-    ev = _select(pd.read_csv(path), where or {}, path)
+    paths = path if isinstance(path, list) else [path]
+    ev = _select(pd.concat([pd.read_csv(p) for p in paths], ignore_index=True), where or {},
+                 Path(", ".join(os.fspath(p) for p in paths)))
     thetas = sorted(ev["theta"].unique())
     bounds = "; ".join(f"theta = {t:g}: {_bounds(ev, t)}" for t in thetas)
     return _ratio_range(Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]), bounds=bounds,
@@ -237,7 +245,8 @@ def ladder_table(path: str | os.PathLike) -> "pd.DataFrame":
     path = Path(path)
     rows = []
     for r in load_ladder(path):
-        src = (path.parent / r.source) if r.source else None
+        src = ([path.parent / s for s in r.source] if isinstance(r.source, tuple)
+               else (path.parent / r.source) if r.source else None)
         if r.kind == "mu-max":
             e = effect_of_mu_max(src)
         elif r.kind == "table":
@@ -249,7 +258,8 @@ def ladder_table(path: str | os.PathLike) -> "pd.DataFrame":
         rows.append({"rung": r.name, "adds": r.adds, "observable": r.observable, "theta_min": e.theta_min,
                      "theta_max": e.theta_max, "low": e.low, "low_se": e.low_se, "high": e.high, "high_se": e.high_se,
                      "ratio": e.ratio, "ratio_se": e.ratio_se, "ratio_min": e.ratio_min, "ratio_max": e.ratio_max,
-                     "bounds": e.bounds, "per_load": e.per_load, "source": r.source, "note": r.note})
+                     "bounds": e.bounds, "per_load": e.per_load,
+                     "source": "; ".join(r.source) if isinstance(r.source, tuple) else r.source, "note": r.note})
     return pd.DataFrame(rows)
 
 
