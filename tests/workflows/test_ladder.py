@@ -127,11 +127,16 @@ def test_an_evaluations_rung_reads_several_csvs_as_one(tmp_path):
     pd.DataFrame([
         {"theta": 0.05, "seed": 0, "t_ramp": 3.0, "mu_a": 1.15, "velocity_status": "runaway"},
         {"theta": 1.0, "seed": 0, "t_ramp": 3.0, "mu_a": 1.05, "velocity_status": "runaway"},
+        {"theta": 1.0, "seed": 0, "t_ramp": 3.0, "mu_a": 1.25, "velocity_status": "error", "message": "not run"},
+        {"theta": 1.0, "seed": 0, "t_ramp": 3.0, "mu_a": 1.35, "velocity_status": "error", "message": "diverged"},
     ]).to_csv(tmp_path / "b.csv", index=False)
     assert math.isnan(effect_of_evaluations(tmp_path / "a.csv").ratio_max)  # alone: no runaway, R unbounded above
     both = effect_of_evaluations([tmp_path / "a.csv", tmp_path / "b.csv"], {"t_ramp": 3.0})
     # theta = 1 in [0.95, 1.05), theta = 0.05 in [0.95, 1.15): R in [0.95/1.15, 1.05/0.95]
     assert (both.ratio_min, both.ratio_max) == (pytest.approx(0.95 / 1.15), pytest.approx(1.05 / 0.95))
+    # a store's member not run yet is said as such, not as a failure
+    assert both.bounds.endswith("theta = 1: steady up to mu_a = 0.95, runaway from mu_a = 1.05, error at mu_a = 1.35, "
+                                "not run at mu_a = 1.25"), both.bounds
     ladder = tmp_path / "l.toml"
     rung = '[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "{kind}"\nsource = ["a.csv", "b.csv"]\n'
     ladder.write_text(rung.format(kind="evaluations"))

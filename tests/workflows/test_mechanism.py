@@ -233,3 +233,13 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
         r = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
                                  *bad, "--out", str(tmp_path / "g2")], capture_output=True, text=True, timeout=120)
         assert r.returncode == 2 and says in r.stderr and not (tmp_path / "g2").exists(), r.stderr
+
+
+def test_the_grid_figure_gives_a_panel_only_to_values_with_a_drawn_run():
+    """A grid continued by a preset whose runs at one ramp are all still to run (tester-16-slower's
+    6-s ramp): that ramp has no panel; a ramp with one drawn run among failures has one."""
+    from slipchain.plots.mechanism import grid_panels
+
+    ev = pd.DataFrame({"t_ramp": [1.0, 3.0, 3.0, 6.0, 6.0, "absent"],
+                       "velocity_status": ["ok", "runaway", "error", "error", "error", "no-steady"]})
+    assert grid_panels(ev, "t_ramp") == [1.0, 3.0, "absent"]

@@ -168,15 +168,26 @@ def plot_dead_weight(ds: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     return save_figure(fig, out, "dead_weight")
 
 
+DRAWN = ("ok", "runaway", "no-steady")  # the tester's classifications that the grid figure draws
+
+
+def grid_panels(ev: "pd.DataFrame", by: str) -> list:
+    """The values of ``by`` that get a panel in :func:`plot_dead_weight_grid`: those with a drawn run
+    (:data:`DRAWN`), numbers in order, then strings."""
+    drawn = ev[ev["velocity_status"].isin(DRAWN)]
+    return sorted(drawn[by].unique(), key=lambda x: (isinstance(x, str), x if isinstance(x, str) else float(x)))
+
+
 def plot_dead_weight_grid(ev: "pd.DataFrame", by: str, out: str | os.PathLike) -> list[Path]:
     """Figs. 2-3 from a grid of dead-weight runs, one panel per value of ``by`` (e.g. the ramp t_ramp):
     applied mu_a against the steady velocity the tester's analysis measured, per theta (each seed its
     own line); runaways at the right edge (open triangles), runs held without a steady velocity by
     t_max ('no-steady': creeping, or still ringing) at the left edge (crosses). ``ev``: the rows of
     :func:`slipchain.workflows.dead_weight.store_evaluations`; runs that failed or did not run are
-    not drawn (the caller says how many)."""
+    not drawn (the caller says how many), and a value none of whose runs is drawn has no panel (e.g. a
+    ramp whose runs are all still to run)."""
     plt = pyplot()
-    values = sorted(ev[by].unique(), key=lambda x: (isinstance(x, str), x if isinstance(x, str) else float(x)))
+    values = grid_panels(ev, by)
     fig, axes = plt.subplots(1, len(values), figsize=(4.2 * len(values) + 1.4, 4.4), sharey=True, squeeze=False)
     thetas = sorted(ev["theta"].unique())
     colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))))
@@ -231,4 +242,4 @@ def plot_epsilon(avg: xr.Dataset, out: str | os.PathLike) -> list[Path]:
     return save_figure(fig, out, "epsilon")
 
 
-__all__ = ["plot_dead_weight", "plot_dead_weight_grid", "plot_epsilon", "plot_mechanism", "plot_velocity"]
+__all__ = ["DRAWN", "grid_panels", "plot_dead_weight", "plot_dead_weight_grid", "plot_epsilon", "plot_mechanism", "plot_velocity"]

@@ -15,7 +15,7 @@ from ..analysis.mechanism import velocity_figure_data
 from ..analysis.reports import epsilon_lines
 from ..analysis.statistics import epsilon_frame_table, epsilon_rows, epsilon_table
 from ..model.config import ConfigError, load_config
-from ..plots.mechanism import plot_dead_weight, plot_dead_weight_grid, plot_epsilon, plot_velocity
+from ..plots.mechanism import DRAWN, plot_dead_weight, plot_dead_weight_grid, plot_epsilon, plot_velocity
 from ..plots.paper import plot_fig5, plot_fig6
 from ..plots.tester import plot_model_vs_experiment
 from ..results.io import write_csv
@@ -161,7 +161,7 @@ def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.Pat
     for name, ev in sources:
         ev = ev.assign(store=name)
         ev[by] = ev[by].astype(object).where(ev[by].notna(), "absent")  # e.g. no ramp: the weight at once
-        bad = ev[~ev["velocity_status"].isin(["ok", "runaway", "no-steady"])]
+        bad = ev[~ev["velocity_status"].isin(DRAWN)]
         if len(bad):
             lines.append(f"{name}: {len(bad)} of {len(ev)} runs not drawn "
                          f"({', '.join(f'{k}: {n}' for k, n in _why(bad).value_counts().items())})")

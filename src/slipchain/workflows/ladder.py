@@ -169,11 +169,16 @@ def _interval(ev: "pd.DataFrame", theta: float) -> tuple[float, float]:
 
 def _bounds(ev: "pd.DataFrame", theta: float) -> str:
     """What the dead-weight runs at one load say about mu_max: the largest steady mu_a, the smallest
-    runaway one, and those that decided nothing (not steady within t_max, or failed)."""
+    runaway one, and those that decided nothing (not steady within t_max, failed, or not run yet: a
+    store's member without a run file, :data:`.dead_weight.NOT_RUN`)."""
+    from .dead_weight import NOT_RUN
+
     ev = ev[np.isclose(ev["theta"], theta)]
     ok = ev[ev["velocity_status"] == "ok"]["mu_a"]
     run = ev[ev["velocity_status"] == "runaway"]["mu_a"]
     other = ev[~ev["velocity_status"].isin(["ok", "runaway"])]
+    if "message" in other.columns:
+        other = other.assign(velocity_status=other["velocity_status"].where(other["message"] != NOT_RUN, NOT_RUN))
     parts = []
     if len(ok):
         parts.append(f"steady up to mu_a = {ok.max():g}")
