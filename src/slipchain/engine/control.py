@@ -157,8 +157,8 @@ class UntilDecided:
     once it is decided (:func:`~slipchain.results.schema.velocity_decided`): steady with a velocity
     change across the window of at most DECIDE_DRIFT, or a runaway beyond the rising branch (faster
     than RUNAWAY_FACTOR*v0*10**delta: sliding steadily there, or still accelerating beyond it,
-    :func:`~slipchain.results.schema.accelerating_beyond_branch`). While the slider still accelerates or slows down it goes on,
-    at most ``t_max``; there a tester's ``ok`` that still drifts becomes ``no-steady``, with the
+    :func:`~slipchain.results.schema.accelerating_beyond_branch`). While the slider still accelerates
+    or slows down it goes on, at most ``t_max``; there a tester's ``ok`` that still drifts becomes ``no-steady``, with the
     drift in its reason, and an accelerating slider stays ``runaway``."""
 
     system: System
