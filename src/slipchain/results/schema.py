@@ -302,6 +302,11 @@ def after_ramp(cfg, time: np.ndarray) -> np.ndarray:
     return time > (ramp_time if ramp_time is not None else DEAD_WEIGHT_RAMP * time[-1])
 
 
+def _beyond_branch(cfg) -> float:
+    """RUNAWAY_FACTOR*v0*10**delta: a velocity far above the last contact's maximum of eq. (1)."""
+    return RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta
+
+
 def dead_weight_velocity(system: System, time: np.ndarray, X_mean: np.ndarray) -> tuple[str, str, VelocityFit | None]:
     """The tester's classification of the slider's trace <X>(t) after the ramp (status, reason,
     fit; :func:`dead_weight_attrs`); with the automatic length (``t_decide``) a window is steady
@@ -311,7 +316,7 @@ def dead_weight_velocity(system: System, time: np.ndarray, X_mean: np.ndarray) -
     rel_tol = REL_TOL if cfg.t_decide is None else DECIDE_DRIFT
     fit = steady_velocity(time, X_mean, rel_tol) if time.size >= 20 else None
     status, reason = (fit.status, fit.reason) if fit else (VelocityStatus.NO_STEADY, "fewer than 20 samples after the ramp")
-    v_branch = RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta  # far above the last contact's maximum
+    v_branch = _beyond_branch(cfg)
     if fit and fit.status == VelocityStatus.OK and fit.velocity > v_branch:
         status = VelocityStatus.RUNAWAY
         reason = (f"runaway: the slider left the rising branch of mu(v) and slides at {fit.velocity:.3g} m/s "
@@ -353,7 +358,7 @@ def accelerating_beyond_branch(system: System, time: np.ndarray, X_mean: np.ndar
     if last.sum() < 2:
         return False
     tl, xl = time[last], X_mean[last]
-    return bool((xl[-1] - xl[0]) / (tl[-1] - tl[0]) > RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta)
+    return bool((xl[-1] - xl[0]) / (tl[-1] - tl[0]) > _beyond_branch(cfg))
 
 
 def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> dict[str, Any]:

@@ -247,6 +247,14 @@ def round_sweep(configs: list[Config], name: str = "mu-max-round") -> SweepDefin
 NOT_RUN = "not run"  # the message of an evaluation whose member the store does not hold yet
 
 
+def outcome(ev: "pd.DataFrame") -> "pd.Series":
+    """Each evaluation row's status, NOT_RUN for a member the store does not hold yet (its status is
+    'error'); a table without a ``message`` column: the status as it is."""
+    if "message" not in ev.columns:
+        return ev["velocity_status"]
+    return ev["velocity_status"].where(ev["message"] != NOT_RUN, NOT_RUN)
+
+
 def _evaluation(mu_a: float, attrs: Mapping[str, Any] | None) -> Evaluation:
     """An evaluation from a run's attributes (the Dataset of :func:`run`, or a stored member's)."""
     a = attrs or {"status": "error", "message": NOT_RUN}
@@ -529,7 +537,7 @@ def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float
 
 __all__ = ["BRACKET", "NOT_RUN", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "Rounds",
            "evaluate", "evaluate_many", "round_sweep",
-           "evaluations_table", "load_plan", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table", "plan_toml",
+           "evaluations_table", "load_plan", "outcome", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table", "plan_toml",
            "run_plan", "single_contact_maximum"]
 
 

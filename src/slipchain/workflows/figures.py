@@ -131,13 +131,6 @@ def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
     return plot_dead_weight(sweep_dataset(store, {"dead_weight"}, "the dead-weight figure"), out)
 
 
-def _why(bad: pd.DataFrame) -> pd.Series:
-    """A failed run's status, or 'not run' for a member the store does not hold yet."""
-    from .dead_weight import NOT_RUN
-
-    return bad["velocity_status"].where(bad["message"] != NOT_RUN, NOT_RUN)
-
-
 def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.PathLike,
                      tables: list[str | os.PathLike] = ()) -> tuple[list[Path], list[str]]:
     """The dead-weight figure of one or more grid stores, one panel per value of the config key ``by``
@@ -146,7 +139,7 @@ def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.Pat
     OUT/evaluations.csv. ``tables``: CSVs of such rows (e.g. a grid whose store is elsewhere), each
     with a ``by`` column. Returns the paths and a line per source saying how many runs were not drawn.
     ConfigError (nothing written) for a key that is not a config key or a table without its column."""
-    from .dead_weight import store_evaluations
+    from .dead_weight import outcome, store_evaluations
 
     sources = []
     for t in tables:
@@ -164,7 +157,7 @@ def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.Pat
         bad = ev[~ev["velocity_status"].isin(DRAWN)]
         if len(bad):
             lines.append(f"{name}: {len(bad)} of {len(ev)} runs not drawn "
-                         f"({', '.join(f'{k}: {n}' for k, n in _why(bad).value_counts().items())})")
+                         f"({', '.join(f'{k}: {n}' for k, n in outcome(bad).value_counts().items())})")
         parts.append(ev)
     ev = pd.concat(parts, ignore_index=True)
     paths = plot_dead_weight_grid(ev, by, out)

@@ -171,14 +171,13 @@ def _bounds(ev: "pd.DataFrame", theta: float) -> str:
     """What the dead-weight runs at one load say about mu_max: the largest steady mu_a, the smallest
     runaway one, and those that decided nothing (not steady within t_max, failed, or not run yet: a
     store's member without a run file, :data:`.dead_weight.NOT_RUN`)."""
-    from .dead_weight import NOT_RUN
+    from .dead_weight import outcome
 
     ev = ev[np.isclose(ev["theta"], theta)]
     ok = ev[ev["velocity_status"] == "ok"]["mu_a"]
     run = ev[ev["velocity_status"] == "runaway"]["mu_a"]
     other = ev[~ev["velocity_status"].isin(["ok", "runaway"])]
-    if "message" in other.columns:
-        other = other.assign(velocity_status=other["velocity_status"].where(other["message"] != NOT_RUN, NOT_RUN))
+    other = other.assign(velocity_status=outcome(other))
     parts = []
     if len(ok):
         parts.append(f"steady up to mu_a = {ok.max():g}")
@@ -198,14 +197,14 @@ def effect_of_evaluations(path: Path | list[Path], where: dict[str, Any] | None 
 
     paths = path if isinstance(path, list) else [path]
     ev = _select(pd.concat([pd.read_csv(p) for p in paths], ignore_index=True), where or {},
-                 Path(", ".join(os.fspath(p) for p in paths)))
+                 ", ".join(os.fspath(p) for p in paths))
     thetas = sorted(ev["theta"].unique())
     bounds = "; ".join(f"theta = {t:g}: {_bounds(ev, t)}" for t in thetas)
     return _ratio_range(Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]), bounds=bounds,
                                per_load="; ".join(f"{t:g}: {_bounds(ev, t)}" for t in thetas)), ev)
 
 
-def _select(d: "pd.DataFrame", where: dict[str, Any], path: Path) -> "pd.DataFrame":
+def _select(d: "pd.DataFrame", where: dict[str, Any], path: str | Path) -> "pd.DataFrame":
     """The rows of table ``d`` (read from ``path``) where every ``where`` column has its value
     (numbers compared with np.isclose); ConfigError if a column is missing or nothing is left."""
     for key, value in where.items():
