@@ -1,10 +1,12 @@
 """Every composed loop, compiled in a process and loaded from numba's cache by the next: the same bits?
 
-    python benchmarks/jitcache_bits.py            # two processes on a fresh NUMBA_CACHE_DIR, then the table
+    python benchmarks/jitcache_bits.py            # three processes on fresh NUMBA_CACHE_DIRs, then the table
 
 Each case is a short run of one combination (body x stepper x drive: every loop that
 ``compose._loop`` and ``compose._row_loop`` build). The first process compiles every loop (and writes
-the cache), the second loads them (slipchain.engine.jitcache). A run's f_d and x are hashed in each; the
+the cache), the second loads them (slipchain.engine.jitcache); a third, on another fresh cache, runs the
+cases in reverse order (each loop compiled after other loops have filled the cache: a loop's bits must
+not depend on what the cache held when it was compiled). A run's f_d and x are hashed in each; the
 table says whether the two agree and what each process took (its whole wall time: compilation, or
 loading, plus the runs). The loops marked ``COMPILE_EACH_PROCESS`` are compiled in both.
 """
@@ -48,34 +50,35 @@ CASES = {
 COMMON = dict(theta=0.5, start="steady", t_total=2e-3, output_interval=1e-4, seed=1)
 
 
-def probe() -> None:
+def probe(reverse: bool = False) -> None:
     from slipchain import make_config, run
 
     out = {}
-    for name, kw in CASES.items():
+    for name, kw in (reversed(CASES.items()) if reverse else CASES.items()):
         ds = run(make_config(**{**COMMON, **kw}), progress=False)
         out[name] = hashlib.sha256(ds.f_d.values.tobytes() + ds.x.values.tobytes()).hexdigest()[:16]
     print(json.dumps(out))
 
 
 def main() -> None:
-    if sys.argv[1:] == ["--probe"]:
-        probe()
+    if sys.argv[1:2] == ["--probe"]:
+        probe(sys.argv[2:] == ["--reverse"])
         return
-    with tempfile.TemporaryDirectory() as cache:
-        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
-        runs, walls = [], []
-        for _ in range(2):
+    runs, walls = [], []
+    with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as other:
+        for directory, flags in ((cache, []), (cache, []), (other, ["--reverse"])):
             t0 = time.perf_counter()
-            r = subprocess.run([sys.executable, __file__, "--probe"], capture_output=True, text=True, env=env, check=True)
+            r = subprocess.run([sys.executable, __file__, "--probe", *flags], capture_output=True, text=True,
+                               env={**os.environ, "NUMBA_CACHE_DIR": directory}, check=True)
             walls.append(time.perf_counter() - t0)
             runs.append(json.loads(r.stdout.strip().splitlines()[-1]))
-    print(f"first process (compiles, fills the cache): {walls[0]:.1f} s; second (loads): {walls[1]:.1f} s\n")
-    print("| case | first process | second process | same bits |\n|---|---|---|---|")
+    print(f"first process (compiles, fills the cache): {walls[0]:.1f} s; second (loads): {walls[1]:.1f} s; "
+          f"third (another cache, the cases in reverse order: compiles): {walls[2]:.1f} s\n")
+    print("| case | first process | second process | third process | same bits |\n|---|---|---|---|---|")
     for name in CASES:
-        a, b = runs[0][name], runs[1][name]
-        print(f"| {name} | {a} | {b} | {'yes' if a == b else '**no**'} |")
-    sys.exit(0 if runs[0] == runs[1] else 1)
+        a, b, c = runs[0][name], runs[1][name], runs[2][name]
+        print(f"| {name} | {a} | {b} | {c} | {'yes' if a == b == c else '**no**'} |")
+    sys.exit(0 if runs[0] == runs[1] == runs[2] else 1)
 
 
 if __name__ == "__main__":

@@ -17,16 +17,44 @@ check (the defining file's time stamp) would not see. A closure holding anything
 compiled (``benchmarks/jitcache_bits.py``: all 18 loops; tests/physics/test_jitcache.py); the one loop that
 did not is compiled in each process (:data:`COMPILE_EACH_PROCESS`, :func:`stable_cache`).
 
+**A loop is compiled by a fresh process, alone.** LLVM optimises a loop together with the compiled
+functions it calls, and with fastmath the result depended on what the process had compiled before: the
+slab's fixed-step loop compiled after the chain's gave other f_d and x than compiled alone, the chain's
+after the slab's likewise, and a loop compiled with a callee loaded from the cache (compiled by another
+process in another context) differed again. The cache then carried those bits into every later process,
+so a run's last bits depended on the history of the working tree's cache (found when the suite's test
+that the fold step equals the adaptive step at an unreachable tolerance failed in a tree whose cache a
+sweep had filled, in the last bit of W_contacts; a fresh clone passed). So: a loop missing from the cache
+is compiled in a fresh Python process that builds only that loop (:meth:`StableFunctionCache.load_overload`,
+from the recipe its factory set, ``compose._loop``) and writes it to the cache, and every process loads it
+from there (each such process names its compiled functions from its own offset, or two loops of one
+qualified name and argument types compiled by two processes would be linked one for the other: the
+reverse-order case of ``benchmarks/jitcache_bits.py`` crashed so); and the loops' callees (samples, bodies, the steppers' helpers, the contact solve of
+:mod:`slipchain.engine.scheme`) are compiled with ``cache=False``, so that the fresh process compiles them
+too. Only the loops, the functions numba inlines anyway (``inline="always"``) and four functions called
+from Python only keep numba's cache (tests/physics/test_jitcache.py checks the rule, and that a loop has
+the same bits whatever was compiled or cached before). The cost: a Python start and the import for each
+loop compiled (once per cache and source version), and the callees compiled in each process that calls
+them from Python (the Krylov stepper's helpers).
+
 This leans on two numba internals, ``Dispatcher._cache`` and ``FunctionCache._index_key`` (numba 0.68, the
 version requirements.lock pins); a numba that changes them makes the test above fail, not the results."""
 
 from __future__ import annotations
 
 import hashlib
+import importlib
+import itertools
+import os
+import pickle
+import subprocess
+import sys
+import warnings
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from numba.core.bytecode import FunctionIdentity
 from numba.core.caching import FunctionCache
 from numba.core.dispatcher import Dispatcher
 
@@ -76,8 +104,39 @@ def _function(f) -> str:
     return f"{f.__module__}.{f.__qualname__}:{f.__code__.co_code.hex()}:{describe(closure)}"
 
 
+# Set in the process that :meth:`StableFunctionCache.load_overload` starts to compile one loop.
+CHILD_ENV = "SLIPCHAIN_JIT_CHILD"
+
+
 class StableFunctionCache(FunctionCache):
-    """numba's FunctionCache with the process-independent closure key of the module docstring."""
+    """numba's FunctionCache with the process-independent closure key of the module docstring.
+
+    ``recipe`` (module, factory, arguments), set by the factory that built the loop, lets a cache miss be
+    compiled in a fresh process (:meth:`load_overload`)."""
+
+    recipe: tuple[str, str, tuple] | None = None
+
+    def load_overload(self, sig, target_context):
+        """The cached loop; on a miss, the loop compiled for this signature in a fresh Python process
+        (:func:`_compile_child`, which writes it to the cache) and loaded from there, so that its code
+        does not depend on what this process compiled before (module docstring). Where that cannot be
+        done (no recipe, the key is numba's own, the child failed), None: numba compiles it here."""
+        found = super().load_overload(sig, target_context)
+        if found is not None or self.recipe is None or os.environ.get(CHILD_ENV):
+            return found
+        try:
+            describe(tuple(c.cell_contents for c in self._py_func.__closure__ or ()))
+        except Unstable:
+            return None
+        child = subprocess.run([sys.executable, "-c", "from slipchain.engine.jitcache import _compile_child; _compile_child()"],
+                               input=pickle.dumps((self.recipe, tuple(sig))), capture_output=True,
+                               env={**os.environ, CHILD_ENV: "1"})
+        if child.returncode != 0:
+            warnings.warn(f"compiling {self.recipe} in a fresh process failed (exit {child.returncode}); compiled in this "
+                          f"process instead, so its last bits may depend on what this process compiled before:\n"
+                          f"{child.stderr.decode(errors='replace')[-2000:]}", RuntimeWarning, stacklevel=2)
+            return None
+        return super().load_overload(sig, target_context)
 
     def _index_key(self, sig, codegen):
         key = super()._index_key(sig, codegen)
@@ -91,7 +150,7 @@ class StableFunctionCache(FunctionCache):
 
 def stable_cache(dispatcher: Dispatcher) -> Dispatcher:
     """Give a ``cache=True`` closure dispatcher the process-independent key (before its first compile).
-    Only the loops compiled on their own need it (compose's samples and drivers); the ``inline="always"``
+    Only the loops compiled on their own need it (compose's drivers); the ``inline="always"``
     steppers are inlined into them and never compiled, nor cached, alone.
 
     The cached code must be the code a process would compile, or a run's last bits would depend on
@@ -109,4 +168,17 @@ def stable_cache(dispatcher: Dispatcher) -> Dispatcher:
     return dispatcher
 
 
-__all__ = ["COMPILE_EACH_PROCESS", "StableFunctionCache", "describe", "sources_digest", "stable_cache"]
+def _compile_child() -> None:
+    """In the fresh process of :meth:`StableFunctionCache.load_overload`: build the loop from its recipe
+    (read pickled from stdin with the signature) and compile it, which writes it to the cache."""
+    data = sys.stdin.buffer.read()
+    (module, factory, args), sig = pickle.loads(data)
+    # numba names a compiled function by its qualified name, argument types and a per-process counter
+    # (FunctionIdentity._unique_ids): two fresh processes would give two loops with the same qualified name
+    # and types (compose's closures) the same name, and a process that loads both would link one in place of
+    # the other. Each loop's process counts from its own offset, drawn from its recipe and signature.
+    FunctionIdentity._unique_ids = itertools.count(10**12 * (1 + int(hashlib.sha256(data).hexdigest()[:12], 16)))
+    getattr(importlib.import_module(module), factory)(*args).compile(sig)
+
+
+__all__ = ["CHILD_ENV", "COMPILE_EACH_PROCESS", "StableFunctionCache", "describe", "sources_digest", "stable_cache"]

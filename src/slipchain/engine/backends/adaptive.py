@@ -40,7 +40,7 @@ from .cpu import contact_power
 STEP_UP = 0.125  # raise the level when err < STEP_UP * tol (doubling the step multiplies err by ~4)
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
     """Per-contact sums as :func:`.cpu._contact_sums`, each step counted ``w`` times (its base steps);
     returns sum f*u. Kept apart: that one is compiled with fastmath (sums contracted to FMA), which
@@ -55,7 +55,7 @@ def _weighted_contact_sums(nc, fk, uk, ca, slow, w):
     return contact_power(nc, fk, uk)
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _grid_level(level, j, sample_steps):
     """The highest level up to ``level`` whose step starts on its grid (j base steps into the sample,
     a multiple of 2**level) and ends within the sample (module docstring, "Time grid")."""
@@ -64,7 +64,7 @@ def _grid_level(level, j, sample_steps):
     return level
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _load_folds(nc, ys, folds_level):
     """The contacts' folds at this level's step (``folds_level``: (2, C)) into the solver's input rows."""
     for k in range(nc):
@@ -72,7 +72,7 @@ def _load_folds(nc, ys, folds_level):
         ys[Y_FB, k] = folds_level[1, k]
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _copy_solver_state(nc, src, dst):
     """The contacts' solver state (its first N_YS_STATE rows: y, 10**y, exp(-c y^2)) from ``src`` to
     ``dst``: kept before a step that may be rejected, put back when it is."""
@@ -81,7 +81,7 @@ def _copy_solver_state(nc, src, dst):
             dst[i, k] = src[i, k]
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _rejected_level(level, err, tol):
     """After a rejected step: the level where the estimate, falling by 4 per halving, meets tol."""
     while level > 0 and err > tol:
@@ -90,7 +90,7 @@ def _rejected_level(level, err, tol):
     return level
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _error(n, ur, Ur, un, Un, aprev, h):
     """h/2 max |a^n - a^(n-1)| over both chains, a^n = (u^(n+1) - u^n)/h, a^(n-1) in ``aprev``."""
     err = 0.0
@@ -99,7 +99,7 @@ def _error(n, ur, Ur, un, Un, aprev, h):
     return 0.5 * h * err
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _keep_acceleration(n, ur, Ur, un, Un, aprev, h):
     """Store a^n = (u^(n+1) - u^n)/h of an accepted step in ``aprev``."""
     for i in range(n):

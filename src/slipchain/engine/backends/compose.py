@@ -34,7 +34,8 @@ stepper, contact solver and drive):
   :func:`rows_driver`, one step of every live row.
 
 :func:`loop` gives the compiled loop of a (geometry, integrator) combination, composed on first use
-(numba caches each on disk: a closure over compiled pieces is cached like a function). The
+(numba caches each on disk: a closure over compiled pieces is cached like a function; the pieces it
+calls are not cached on their own, :mod:`slipchain.engine.jitcache`). The
 capability table (:mod:`slipchain.model.capabilities`) says which combinations run where; on the
 CPU every one does. A new material (issue 28) is a new body, a new stepper (issue 27) a new
 stepper: neither touches the loops.
@@ -115,8 +116,7 @@ def fixed_sample(explicit, commit, fastmath: bool):
     Returns (base steps, sum of f_d contributions, the four works)."""
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
-    @stable_cache
-    @nb.njit(cache=True, **flags)
+    @nb.njit(**flags)
     def sample(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, nstep, sample_steps, rc,
                scratch, wc, wd, wdr, wv):
         un, Un, dampx, dampX, rk, ra, uk, fk, ok, ysave = scratch
@@ -144,8 +144,7 @@ def step_sample(stepper):
     steppers: each step takes one or more base steps), from the sample's start. Arguments and
     returns as :func:`fixed_sample`."""
 
-    @stable_cache
-    @nb.njit(cache=True)
+    @nb.njit
     def sample(p, Fr, k0, mt, br, xr, ur, Xr, Ur, st, vs, nc, ys, fr, ctrl, cr, ap, ca, nstep, sample_steps, rc,
                scratch, wc, wd, wdr, wv):
         fds = 0.0
@@ -212,7 +211,7 @@ def adaptive_stepper(explicit, commit):
     return step
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _back_off(cr):
     """Back from backward Euler to the explicit steps: wait twice as many explicit steps as last time
     (1, 2, 4, ... at most MAX_BACKOFF) before the next implicit try."""
@@ -225,7 +224,7 @@ def _back_off(cr):
 PLAN_TAIL, PLAN_EXPLICIT, PLAN_IMPLICIT = 0, 1, 2
 
 
-@nb.njit(cache=True)
+@nb.njit
 def implicit_plan(cr, ctrl, j, sample_steps):
     """The implicit stepper's next step (:mod:`.implicit`): (what, level, base steps). An implicit step
     needs no time grid (it has no folds per level): any whole number of base steps up to dt 2**level
@@ -240,7 +239,7 @@ def implicit_plan(cr, ctrl, j, sample_steps):
     return PLAN_IMPLICIT, want, w
 
 
-@nb.njit(cache=True)
+@nb.njit
 def after_explicit(cr, ctrl, was, nc, ys):
     """After an explicit step at the adaptive levels: count down the back-off, or, at the explicit top
     with a small error and every contact on the rising branch, let the next step be implicit."""
@@ -252,7 +251,7 @@ def after_explicit(cr, ctrl, was, nc, ys):
         cr[CT_LEVEL] = top_explicit + 1
 
 
-@nb.njit(cache=True)
+@nb.njit
 def implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
     """A backward-Euler try of level ``lv`` (``its`` Newton iterations, -1: not takeable; error
     estimate ``err``; energy residual ``bal`` of works ``scale``): True where it is accepted, with the
@@ -291,7 +290,7 @@ def implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit
 def implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, yk, sk, uk, fk, ca, slow, w):
     """An accepted backward-Euler step, before the body's commit: its accelerations kept (the next
     error estimate), the contacts' velocities, forces and solver state from their (y, sign) in
@@ -373,7 +372,7 @@ def scratch_arrays(n, cmax):
             np.empty(cmax), np.empty(cmax, dtype=np.bool_), np.empty((N_YS_STATE, cmax)))
 
 
-@nb.njit(cache=True)
+@nb.njit
 def start_sample(row, n_contacts, ysolve, params, ctl):
     """A row at the start of an output sample: exact 10**y, exp(-c y^2) for its contacts, level 0
     with no error estimate (so that a chunk boundary changes nothing)."""
@@ -386,7 +385,7 @@ def start_sample(row, n_contacts, ysolve, params, ctl):
     ctl[row, CT_BACKOFF] = 0
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _restore_carry(cy, cr):
     """The implicit stepper's place at the start of a sample: where the last sample left it (Batch.carry)."""
     cr[CT_LEVEL] = int(cy[0])
@@ -395,7 +394,7 @@ def _restore_carry(cy, cr):
     cr[CT_BACKOFF] = int(cy[3])
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _save_carry(cy, cr):
     cy[0] = cr[CT_LEVEL]
     cy[1] = cr[CT_HAVE]
@@ -827,15 +826,27 @@ def loop(geometry: str, adaptive: bool | str, material: str = "elastic", top: bo
 def _row_loop(body: str):
     """One adaptive step of each live row (:func:`rows_driver`) with this body: the slab's FFT loop, or the
     same driver over the chains' body (the implicit stepper's explicit levels on chain2d, one row at a time)."""
-    return _loop(body, True) if body == "spectral" else rows_driver(stepper(body, True), False)
+    if body == "spectral":
+        return _loop(body, True)
+    return _recipe(rows_driver(stepper(body, True), False), "_row_loop", (body,))
 
 
 @functools.cache
 def _loop(body: str, adaptive: bool | str):
     explicit, commit, fastmath = _body(body)
     if body.startswith("lattice"):
-        return kernel_driver(step_sample(stepper(body, adaptive)) if adaptive else fixed_sample(explicit, commit, fastmath))
-    return rows_driver(stepper(body, adaptive), fastmath and not adaptive)
+        loop = kernel_driver(step_sample(stepper(body, adaptive)) if adaptive else fixed_sample(explicit, commit, fastmath))
+    else:
+        loop = rows_driver(stepper(body, adaptive), fastmath and not adaptive)
+    return _recipe(loop, "_loop", (body, adaptive))
+
+
+def _recipe(loop, factory: str, args: tuple):
+    """How a fresh process builds ``loop`` again (:class:`~slipchain.engine.jitcache.StableFunctionCache`:
+    a loop missing from the cache is compiled in a fresh process, so that its code does not depend on
+    what this one compiled before)."""
+    loop._cache.recipe = (__name__, factory, args)
+    return loop
 
 
 __all__ = ["BODIES", "adaptive_stepper", "advance", "fft_advance", "fixed_stepper", "kernel_advance", "kernel_driver",

@@ -19,7 +19,7 @@ from ..scheme import (C_F, C_SLOW, C_U, C_U2, FASTMATH, LN10, NEWTON_TOL, O_FD, 
                       P_KL, P_KLY, P_KT, P_KY, P_LAT, P_LY, P_M, P_META, P_ML, P_VD, TAYLOR_MAX, Y_FA, Y_FB, Y_LOG, Y_P,
                       Y_Q, compile_for)
 
-_scheme = compile_for(lambda name, inline: nb.njit(cache=True, inline="always" if inline else "never"))
+_scheme = compile_for(lambda name, inline: nb.njit(inline="always" if inline else "never"))
 exp_taylor = _scheme.exp_taylor
 scaled_exp = _scheme.scaled_exp
 solve_contact_bracketed = _scheme.solve_contact_bracketed
@@ -32,7 +32,7 @@ block_update_2d = _scheme.block_update_2d
 row_parameters = _scheme.row_parameters
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def newton_pass(nc, ra, vstar, ys, unew, ok, m_eff, b, c):
     """Two Newton steps from the warm start for every contact, branch-free so that it vectorises.
 
@@ -59,7 +59,7 @@ def newton_pass(nc, ra, vstar, ys, unew, ok, m_eff, b, c):
 
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, drive, fconst, dtm, dtmL):
     """Explicit velocity update of all blocks (springs, drive, damping); returns sum of drive forces.
 
@@ -78,7 +78,7 @@ def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, 
     return Kd * (n * drive - sx)
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive, fconst, dtm,
                         dtmL):
     """:func:`_explicit_forces` on the (Lx, Ly) lattice of 'chain2d' (row-major, block ix*Ly + iy)."""
@@ -99,7 +99,7 @@ def _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
     return Kd * (n * drive - sx)
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt, fold):
     """The implicit contact solve of one step (scheme, step 3) for one row: every contact block's
     new velocity written into ``un``, the force applied into ``fk``. ``fold``: integrator 'fold'
@@ -124,7 +124,7 @@ def _contacts(nc, un, st, rk, ra, uk, fk, ok, vs, ys, m, m_eff, bc, c, inv_dt, f
         un[st[k]] = uk[k]
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _refresh_solver(nc, ys, c):
     """Exact 10**y and exp(-c y^2) at the start of a sample: no round-off drift of the updates."""
     for k in range(nc):
@@ -132,7 +132,7 @@ def _refresh_solver(nc, ys, c):
         ys[Y_Q, k] = math.exp(-c * ys[Y_LOG, k] * ys[Y_LOG, k])
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def contact_power(nc, fk, uk):
     """sum_k f_k u_k over the contacts, in a loop that writes nothing (spectral.body_explicit says
     why); one function for every stepper, so that the fixed and the adaptive step sum alike."""
@@ -142,7 +142,7 @@ def contact_power(nc, fk, uk):
     return p
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _contact_sums(nc, fk, uk, ca, slow):
     """Accumulate per-contact force, velocity, velocity**2, slow steps; returns sum f*u."""
     p = contact_power(nc, fk, uk)
@@ -169,7 +169,7 @@ def lattice_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h,
                             p[P_FCONST], h / m, h / p[P_ML])
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def lattice_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     """The chains' body, commit (:mod:`.compose`; scheme, step 4): the positions from the new
     velocities; returns (the damping work over the step, 0: no bulk viscosity). The update itself,
@@ -186,7 +186,7 @@ def lattice_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     return wd * h, 0.0
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _end_sample(xr, Xr, fd_sum, sample_steps, w_contact, out_s):
     """Write one sample's outputs (mean f_d, and mean x and X at its end) into ``out_s`` (N_OUT,);
     returns False if a non-finite value appeared (the row then stops)."""

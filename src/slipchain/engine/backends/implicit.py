@@ -88,7 +88,7 @@ Y_FLOOR = -40.0  # y of a contact whose velocity the update puts at exactly zero
 ENERGY_TOL = 1e-4  # a step's energy residual (trapezoidal works) at most this fraction of its works (module docstring)
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def solve_cyclic(a, bb, d, ox, oX, r, z):
     """Solve J z = r for the cyclic block-tridiagonal symmetric J of the implicit chain.
 
@@ -167,7 +167,7 @@ def solve_cyclic(a, bb, d, ox, oX, r, z):
         z[k] = rhs[k, 0] - rhs[k, 1] * c0 - rhs[k, 2] * c1
 
 
-@nb.njit(cache=True)
+@nb.njit
 def chain_coefficients(p, h, J=0, S=0.0):
     """The constant entries of A = M + h C + h**2 K for the chain (module docstring): (a0, bb, d0,
     ox, oX) -- block diagonal (IL, IL-UL, UL) and the couplings of neighbours (IL, UL). With J > 0
@@ -186,7 +186,7 @@ def chain_coefficients(p, h, J=0, S=0.0):
     return a0, bb, d0, -(h2 * K + h * meta), -(h2 * KL + h * meta)
 
 
-@nb.njit(cache=True)
+@nb.njit
 def chain_arms(p, mt, br, h, gx, gX, fx, fX):
     """The chain's arms for a backward-Euler step h (:class:`Arms`, compiled): G = sum_j r_j a_j xi_j of
     both layers into gx, gX, the bulk springs' force of G into fx, fX; returns S = sum_j r_j c_j."""
@@ -205,7 +205,7 @@ def chain_arms(p, mt, br, h, gx, gX, fx, fX):
     return S
 
 
-@nb.njit(cache=True)
+@nb.njit
 def chain_arm_work(p, mt, br, ur, Ur, un, Un, h):
     """The chain's arms' work over an accepted backward-Euler step by the trapezoidal rule: their force
     -K_b g . v at the start (g = sum_j r_j xi_j) and at the end (g' = G + S v', :class:`Arms`)."""
@@ -226,7 +226,7 @@ def chain_arm_work(p, mt, br, ur, Ur, un, Un, h):
     return 0.5 * w * h
 
 
-@nb.njit(cache=True)
+@nb.njit
 def _contact_force(s, y, vstar, amp, c, meta_c):
     """(u, f, df/du) of a contact with sign s and y = log10(|u|/v*): eq. (1) with its damping m eta_c u."""
     pw = math.exp(LN10 * y)
@@ -240,7 +240,7 @@ def _make_be_try(arms: bool):
     the arms' code compiled only where there are arms (so that the elastic try is compiled as it was
     before them: its fastmath callees make its last bits depend on the surrounding code)."""
 
-    @nb.njit(cache=True)
+    @nb.njit
     def be_try(p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have, mt, br):
         """One backward-Euler step of the chain from (x, u, X, U) at time t1 - h: writes the new
         velocities into ``un``, ``Un`` and each contact's (y, sign) into ``yk``, ``sk``, touching
@@ -318,7 +318,7 @@ be_try = _make_be_try(False)
 be_try_arms = _make_be_try(True)
 
 
-@nb.njit(cache=True)
+@nb.njit
 def start_contacts(nc, st, ur, un, ys, vs, yk, sk):
     """Newton's start for the contacts of a backward-Euler step: each contact's sign from its velocity
     at the step's start and its y from the solver state, or from the extrapolated velocity in ``un``
@@ -335,7 +335,7 @@ def start_contacts(nc, st, ur, un, ys, vs, yk, sk):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit
 def factors(nc, c, yk, pk, qk):
     """10**y and exp(-c y**2) of each contact, exact."""
     for k in range(nc):
@@ -343,7 +343,7 @@ def factors(nc, c, yk, pk, qk):
         qk[k] = math.exp(-c * yk[k] * yk[k])
 
 
-@nb.njit(cache=True)
+@nb.njit
 def eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk):
     """Each contact's velocity (into ``un``), h f(u) (into ``hf`` at its block) and h f'(u) (``dk``),
     from its (y, sign): eq. (1) with the damping m eta_c u."""
@@ -356,7 +356,7 @@ def eval_contacts(nc, st, vs, yk, sk, pk, qk, amp, c, meta_c, h, un, hf, dk):
         dk[k] = h * (meta_c + big * (-2.0 * c * yk[k]) / (LN10 * vs[k] * pk[k]))
 
 
-@nb.njit(cache=True)
+@nb.njit
 def update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, stride):
     """A Newton update of the contacts from the velocity updates ``dv`` (block i's at dv[stride i]):
     in y (the fold scheme's variable, at most MAX_DY decades), or, where it crosses zero, to the new
@@ -386,7 +386,7 @@ def update_contacts(nc, st, vs, yk, sk, pk, qk, c, dv, stride):
     return big_y
 
 
-@nb.njit(cache=True)
+@nb.njit
 def finish_contacts(nc, st, vs, yk, sk, pk, un):
     """Newton converged: each contact's velocity into ``un``; False where one is not below Y_MAX."""
     for k in range(nc):
@@ -396,7 +396,7 @@ def finish_contacts(nc, st, vs, yk, sk, pk, un):
     return True
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _residual(n, a0, bb, d0, ox, oX, un, Un, hf, rhs, res):
     """-(A v + h f(v) - rhs), interleaved (module docstring)."""
     for i in range(n):
@@ -406,7 +406,7 @@ def _residual(n, a0, bb, d0, ox, oX, un, Un, hf, rhs, res):
         res[2 * i + 1] = rhs[2 * i + 1] - (d0 * Un[i] + bb * un[i] + oX * (Un[ip] + Un[im]))
 
 
-@nb.njit(cache=True)
+@nb.njit
 def be_contacts(nc, st, vs, ys, yk, sk, un, uk, fk, amp, c, meta_c):
     """An accepted backward-Euler step's contacts: their velocities ``uk`` and applied forces ``fk``
     (eq. 1 at the new velocity), and the fold scheme's solver state (y, 10**y, exp(-c y**2)) exact."""
@@ -419,7 +419,7 @@ def be_contacts(nc, st, vs, ys, yk, sk, un, uk, fk, amp, c, meta_c):
         ys[Y_Q, k] = math.exp(-c * yk[k] * yk[k])
 
 
-@nb.njit(cache=True)
+@nb.njit
 def chain_damping(p, un, Un, dampx, dampX):
     """The pair damping forces at the new velocities (the implicit step's), for the damping work."""
     n = un.size
@@ -431,7 +431,7 @@ def chain_damping(p, un, Un, dampx, dampX):
         dampX[i] = meta * (Un[ip] + Un[im] + un[i] - 3.0 * Un[i])
 
 
-@nb.njit(cache=True)
+@nb.njit
 def damping_power(dampx, dampX, u, U):
     """sum_i (damp_x u + damp_X U): the pair damping's power (as :func:`.cpu.lattice_commit` sums it)."""
     wd = 0.0
@@ -440,7 +440,7 @@ def damping_power(dampx, dampX, u, U):
     return wd
 
 
-@nb.njit(cache=True)
+@nb.njit
 def contact_power_at(nc, st, vs, u, amp, c, meta_c):
     """sum_k f_k u_k with eq. (1) (and its damping) at the blocks' velocities ``u``."""
     pw = 0.0
@@ -452,7 +452,7 @@ def contact_power_at(nc, st, vs, u, amp, c, meta_c):
     return pw
 
 
-@nb.njit(cache=True)
+@nb.njit
 def chain_energy(p, xr, ur, Xr, Ur, h, t):
     """The chain's mechanical energy at (x + h u, u, X + h U, U) and drive time t: kinetic, the springs
     K, K_L, K_T, the drive springs K_d (v_d t - X) and the dead weight's potential -F_b X (h = 0:
@@ -473,7 +473,7 @@ def chain_energy(p, xr, ur, Xr, Ur, h, t):
     return e
 
 
-@nb.njit(cache=True)
+@nb.njit
 def step_balance(p, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs, dampx, dampX):
     """A backward-Euler step's works by the trapezoidal rule between its start (x, u, X, U) and its
     end (x + h u', u', X + h U', U'), and its energy residual, without moving anything: returns
@@ -498,7 +498,7 @@ def step_balance(p, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs, dampx, dampX):
     return de - (w_drive + w_damp - w_contact), abs(w_drive) + abs(w_damp) + abs(w_contact), fsum, w_drive, w_damp, w_contact
 
 
-@nb.njit(cache=True)
+@nb.njit
 def rising(nc, ys):
     """Every contact on the rising branch with the margin that backward Euler needs (y < Y_MAX)."""
     for k in range(nc):
@@ -507,7 +507,7 @@ def rising(nc, ys):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit
 def drive_force_sum(p, Xr, t):
     """sum_i K_d (v_d t - X_i): the drive springs' force at the end of an implicit step."""
     sx = 0.0

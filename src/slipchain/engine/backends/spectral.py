@@ -48,7 +48,7 @@ import numba as nb
 from ..scheme import A_WCONTACT, FASTMATH, O_FD, O_XMEAN, O_XUMEAN, P_FCONST, P_KD, P_M, P_META, P_ML, P_VD
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def body_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
     """The slab's body, explicit part (:mod:`.compose`; module docstring, step 2) for one row with
     parameters ``p``, a step h at drive time t, given -IFFT[a**2 k FFT(x)] in ``Fr`` (spring drive:
@@ -94,7 +94,7 @@ def body_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t)
     return k0 * (n * vd * t - sx)
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def body_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     """The slab's body, commit (:mod:`.compose`; module docstring, step 4): positions from the
     accepted velocities (blocks, and the plate with the dead weight); returns the damping work over

@@ -37,7 +37,7 @@ from .cpu import lattice_commit, lattice_explicit
 from .spectral import body_commit, body_explicit
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def combined_fields(J, mt, br, gx, gX):
     """g = sum_j r_j xi_j of both layers into gx, gX."""
     n = gx.size
@@ -53,7 +53,7 @@ def combined_fields(J, mt, br, gx, gX):
             gX[i] += r * Xj[i]
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def bulk_forces(ly, gx, gX, fx, fX, K, KL, KT, KY, KLY):
     """The bulk springs' force on every block for displacement fields gx (interface layer), gX
     (upper layer): the chains' stencil without drive, damping or dead weight (``ly`` = 1: the chain;
@@ -73,14 +73,14 @@ def bulk_forces(ly, gx, gX, fx, fX, K, KL, KT, KY, KLY):
             fX[i] = KL * (gX[ipx + iy] + gX[imx + iy] - 2.0 * gX[i]) + KLY * (gX[jp] + gX[jm] - 2.0 * gX[i]) - t
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _kick(un, Un, fx, fX, dtm, dtmL):
     for i in range(un.size):
         un[i] += dtm * fx[i]
         Un[i] += dtmL * fX[i]
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _arm_work(fx, fX, ur, Ur, un, Un):
     """sum of the arms' force times the step's mean velocity (a loop that writes nothing)."""
     w = 0.0
@@ -89,7 +89,7 @@ def _arm_work(fx, fX, ur, Ur, un, Un):
     return 0.5 * w
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _relax(J, mt, br, un, Un, h):
     """xi_j <- a_j xi_j + tau_j (1 - a_j) u' for every term and layer."""
     for j in range(J):
@@ -138,13 +138,13 @@ def prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
 # the chains.
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def slab_prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
     """The viscoelastic slab's explicit part: the elastic slab's with the arms' force already in ``Fr``."""
     return body_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t)
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _slab_arm_work(fa, ur, Ur, un, Un):
     """sum of the arms' force times the step's mean velocity relative to the plate (which takes the
     reaction): a loop that writes nothing."""
@@ -154,7 +154,7 @@ def _slab_arm_work(fa, ur, Ur, un, Un):
     return 0.5 * w
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _slab_relax(J, mt, br, un, Un, h):
     """xi_j <- a_j xi_j + tau_j (1 - a_j) (u' - U') for every term."""
     for j in range(J):
@@ -166,7 +166,7 @@ def _slab_relax(J, mt, br, un, Un, h):
             xj[i] = a * xj[i] + c * (un[i] - Un[i])
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def slab_prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     """The viscoelastic slab's commit: the arms' work, their update, then the elastic slab's commit;
     returns (damping work, the arms' work)."""
@@ -188,7 +188,7 @@ def slab_prony_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
 # is the springs' pull on the top's uniform mode, kappa a**2 (v_d t - <Z_P>) per block.
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def slab_top_prony_explicit(p, Fr, k0, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h, t):
     """The viscoelastic slab's explicit part under the drive springs: ``Fr`` is the body's whole force
     (the drive reaches the blocks through the top); returns the drive springs' force sum, which the
@@ -322,7 +322,7 @@ def top_solve(xh, gbh, Zh, Th, ft, tp, mt, bs, steps, params, wgt, fel, farm, wt
         bs[row, meta, 0] = kap * (xd - Zh[row, 0, 0, 0])
 
 
-@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@nb.njit(fastmath=FASTMATH, error_model="numpy")
 def prony_be_commit(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h):
     """A backward-Euler step's commit on the chains (integrator 'implicit', :class:`.implicit.Arms`):
     the arms' update with the step's velocities, then the elastic body's commit (the arms' work is
