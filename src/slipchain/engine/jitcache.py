@@ -29,9 +29,9 @@ is compiled in a fresh Python process that builds only that loop (:meth:`StableF
 from the recipe its factory set, ``compose._loop``) and writes it to the cache, and every process loads it
 from there (each such process names its compiled functions from its own offset, or two loops of one
 qualified name and argument types compiled by two processes would be linked one for the other: the
-reverse-order case of ``benchmarks/jitcache_bits.py`` crashed so); and the loops' callees (samples, bodies, the steppers' helpers, the contact solve of
-:mod:`slipchain.engine.scheme`) are compiled with ``cache=False``, so that the fresh process compiles them
-too. Only the loops, the functions numba inlines anyway (``inline="always"``) and four functions called
+reverse-order case of ``benchmarks/jitcache_bits.py`` crashed so); and the loops' callees (samples,
+bodies, the steppers' helpers, the contact solve of :mod:`slipchain.engine.scheme`) are compiled with
+``cache=False``, so that the fresh process compiles them too. Only the loops, the functions numba inlines anyway (``inline="always"``) and four functions called
 from Python only keep numba's cache (tests/physics/test_jitcache.py checks the rule, and that a loop has
 the same bits whatever was compiled or cached before). The cost: a Python start and the import for each
 loop compiled (once per cache and source version), and the callees compiled in each process that calls
