@@ -31,8 +31,8 @@ from there (each such process names its compiled functions from its own offset, 
 qualified name and argument types compiled by two processes would be linked one for the other: the
 reverse-order case of ``benchmarks/jitcache_bits.py`` crashed so); and the loops' callees (samples,
 bodies, the steppers' helpers, the contact solve of :mod:`slipchain.engine.scheme`) are compiled with
-``cache=False``, so that the fresh process compiles them too. Only the loops, the functions numba inlines anyway (``inline="always"``) and four functions called
-from Python only keep numba's cache (tests/physics/test_jitcache.py checks the rule, and that a loop has
+``cache=False``, so that the fresh process compiles them too. Only the loops, the functions numba
+inlines anyway (``inline="always"``) and four functions called from Python only keep numba's cache (tests/physics/test_jitcache.py checks the rule, and that a loop has
 the same bits whatever was compiled or cached before). The cost: a Python start and the import for each
 loop compiled (once per cache and source version), and the callees compiled in each process that calls
 them from Python (the Krylov stepper's helpers).
@@ -124,9 +124,7 @@ class StableFunctionCache(FunctionCache):
         found = super().load_overload(sig, target_context)
         if found is not None or self.recipe is None or os.environ.get(CHILD_ENV):
             return found
-        try:
-            describe(tuple(c.cell_contents for c in self._py_func.__closure__ or ()))
-        except Unstable:
+        if self._closure_text() is None:
             return None
         child = subprocess.run([sys.executable, "-c", "from slipchain.engine.jitcache import _compile_child; _compile_child()"],
                                input=pickle.dumps((self.recipe, tuple(sig))), capture_output=True,
@@ -138,11 +136,17 @@ class StableFunctionCache(FunctionCache):
             return None
         return super().load_overload(sig, target_context)
 
+    def _closure_text(self) -> str | None:
+        """:func:`describe` of the closure, None where it has no process-independent description."""
+        try:
+            return describe(tuple(c.cell_contents for c in self._py_func.__closure__ or ()))
+        except Unstable:
+            return None
+
     def _index_key(self, sig, codegen):
         key = super()._index_key(sig, codegen)
-        try:
-            text = describe(tuple(c.cell_contents for c in self._py_func.__closure__ or ()))
-        except Unstable:
+        text = self._closure_text()
+        if text is None:
             return key  # numba's own key: compiled in each process
         closure = hashlib.sha256((text + sources_digest()).encode()).hexdigest()
         return key[0], key[1], (key[2][0], closure)
