@@ -269,9 +269,18 @@ def test_only_runs_the_selected_members_and_leaves_the_rest_pending(tmp_path, cl
     with pytest.raises(SweepError, match="not a value of dimension 'theta'"):
         run_sweep(sw, tmp_path / "bad", client=client, progress=False, only={"theta": ["0.7"]})
     assert not (tmp_path / "bad").exists()  # refused before the store was created
+    # a left-out member's checkpoint (as a killed earlier invocation leaves it) is its progress: kept
+    st = Store.open(tmp_path / "s", sw)
+    waiting = next(m for m in sw.members if m.coords["theta"] == 0.5)
+    st.checkpoint_path([waiting]).parent.mkdir(exist_ok=True)
+    st.checkpoint_path([waiting]).write_bytes(b"progress of an earlier invocation")
+    stale = st.checkpoint_path([waiting]).with_name("0123456789abcdef.nc")  # of no pending member: pruned
+    stale.write_bytes(b"of an earlier batching")
     rep = run_sweep(sw, tmp_path / "s", client=client, progress=False, only={"theta": ["1"]})
     picked = sorted(m.id for m in sw.members if m.coords["theta"] == 1.0)
     assert sorted(o.member.id for o in rep.ran) == picked and rep.deselected == 2 and rep.ok
+    assert st.checkpoint_path([waiting]).exists() and not stale.exists()
+    st.checkpoint_path([waiting]).unlink()  # (not a real checkpoint: the run below would refuse it, then start over)
     ds = Store.open(tmp_path / "s").dataset()
     assert list(ds["status"].sel(theta=0.5).values) == ["missing", "missing"]
     rest = run_sweep(sw, tmp_path / "s", client=client, progress=False)  # the rest later: the whole sweep
@@ -439,7 +448,7 @@ def test_worker_killed_mid_member_resumes_it_from_its_checkpoint(tmp_path, clien
 def test_stale_checkpoints_are_pruned(tmp_path, client):
     sw = _sweep()
     st = Store.open(tmp_path / "s", sw)
-    stale = st.path / "checkpoints" / "0123456789abcdef.nc"
+    stale = st.checkpoint_path([waiting]).with_name("0123456789abcdef.nc")
     stale.parent.mkdir()
     stale.write_bytes(b"from an earlier batching")
     rep = run_sweep(sw, st, client=client, progress=False)

@@ -244,14 +244,16 @@ def _run_locked(st: Store, note: str | None, batch_size: int | None, client, sch
                          skipped=[m for m in st.sweep.members if m.id in done], notes=[note] if note else [],
                          quarantined=quarantined, reused=reused)
     pending = sorted(st.pending(), key=expected_cost, reverse=True)
-    if selected is not None:  # --only: the others wait for a later invocation
-        report.deselected = sum(m.id not in selected for m in pending)
+    waiting: list[Member] = []
+    if selected is not None:  # --only: the others wait for a later invocation (their checkpoints kept)
+        waiting = [m for m in pending if m.id not in selected]
+        report.deselected = len(waiting)
         pending = [m for m in pending if m.id in selected]
     bar = _SweepProgress(progress, len(pending), len(report.skipped))
     try:
         with _interrupt_flag():
             _run_groups(pending, batch_size, client, scheduler, n_workers, threads, st, report, bar, backend,
-                        checkpoint_every, announce)
+                        checkpoint_every, announce, waiting)
     except KeyboardInterrupt:
         report.interrupted = True
     finally:
@@ -278,10 +280,17 @@ def _best_effort(write, *args) -> None:
 
 def _run_groups(pending: list[Member], batch_size: int | None, client, scheduler: str | None, n_workers: int | None,
                 threads: int, st: Store, report: SweepReport, bar: "_SweepProgress", backend: str,
-                checkpoint_every: float | None, announce: Callable[[str], None] | None = None) -> None:
-    """Submit the pending members (in batches) to ``client`` or a new cluster and store each result."""
-    groups = batches(pending, batch_size) if batch_size and batch_size > 1 else [[m] for m in pending]
-    st.prune_checkpoints(groups)  # those of earlier batchings or of members stored since
+                checkpoint_every: float | None, announce: Callable[[str], None] | None = None,
+                waiting: Sequence[Member] = ()) -> None:
+    """Submit the pending members (in batches) to ``client`` or a new cluster and store each result.
+    ``waiting``: pending members left out by ``--only``, whose checkpoints (alone or in a batch of
+    them) are kept for the invocation that runs them."""
+    def grouped(members):
+        return batches(list(members), batch_size) if batch_size and batch_size > 1 else [[m] for m in members]
+
+    groups = grouped(pending)
+    # the checkpoints of earlier batchings or of members stored since go; a waiting member's stays
+    st.prune_checkpoints([*groups, *grouped(waiting), *([m] for m in waiting)])
     if not pending:
         return
     if client is not None:
