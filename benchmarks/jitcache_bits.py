@@ -8,7 +8,8 @@ the cache), the second loads them (slipchain.engine.jitcache); a third, on anoth
 cases in reverse order (each loop compiled after other loops have filled the cache: a loop's bits must
 not depend on what the cache held when it was compiled). A run's f_d and x are hashed in each; the
 table says whether the two agree and what each process took (its whole wall time: compilation, or
-loading, plus the runs). The loops marked ``COMPILE_EACH_PROCESS`` are compiled in both.
+loading, plus the runs). Every loop is compiled by a fresh process and loaded, in every process (since
+2026-11-27 the chain's implicit stepper with the elastic body too, which was compiled in each).
 """
 
 from __future__ import annotations

@@ -13,9 +13,7 @@ own closure; plain values (numbers, strings, flags) by ``repr``; and the content
 :mod:`slipchain.engine` and :mod:`slipchain.model`, the modules whose functions a composed loop inlines.
 So an edit in any of those modules invalidates the composed loops' cache entries, which numba's own
 check (the defining file's time stamp) would not see. A closure holding anything else keeps numba's key
-(it is then compiled in each process, as before). Every loop so cached gives the same bits loaded as
-compiled (``benchmarks/jitcache_bits.py``: all 18 loops; tests/physics/test_jitcache.py); the one loop that
-did not is compiled in each process (:data:`COMPILE_EACH_PROCESS`, :func:`stable_cache`).
+(it is then compiled in each process, as before).
 
 **A loop is compiled by a fresh process, alone.** LLVM optimises a loop together with the compiled
 functions it calls, and with fastmath the result depended on what the process had compiled before: the
@@ -58,10 +56,6 @@ from numba.core.bytecode import FunctionIdentity
 from numba.core.caching import FunctionCache
 from numba.core.dispatcher import Dispatcher
 
-# A dispatcher with this attribute set makes every closure over it keep numba's own key (compiled in each
-# process): the one loop whose code loaded from the cache differs from the code compiled in the process
-# (compose.implicit_stepper's elastic chain step; see :func:`stable_cache`).
-COMPILE_EACH_PROCESS = "compile_in_each_process"
 _PLAIN = (bool, int, float, complex, str, bytes, type(None))
 
 
@@ -91,8 +85,6 @@ def describe(obj: Any) -> str:
     if isinstance(obj, dict):
         return f"dict({', '.join(sorted(f'{describe(k)}: {describe(v)}' for k, v in obj.items()))})"
     if isinstance(obj, Dispatcher):
-        if getattr(obj, COMPILE_EACH_PROCESS, False):
-            raise Unstable(f"{obj.py_func.__qualname__} is compiled in each process")
         return f"dispatcher[{describe(obj.targetoptions)}]({_function(obj.py_func)})"
     if callable(obj) and hasattr(obj, "__code__"):
         return _function(obj)
@@ -157,15 +149,12 @@ def stable_cache(dispatcher: Dispatcher) -> Dispatcher:
     Only the loops compiled on their own need it (compose's drivers); the ``inline="always"``
     steppers are inlined into them and never compiled, nor cached, alone.
 
-    The cached code must be the code a process would compile, or a run's last bits would depend on
-    whether its loop came from the cache (a run resumed in a new process would differ from the
-    uninterrupted run). It is, for every composed loop checked (``benchmarks/jitcache_bits.py``) but
-    one: the chain's implicit stepper with the elastic body gives other last bits from the cache than
-    compiled in the process (6e-15 relative in f_d from the first sample; its backward-Euler try's
-    fastmath callees are optimised with the code around them, and the driver and sample function are
-    separate numba units that LLVM optimises together only when both are compiled in the process).
-    That stepper is marked :data:`COMPILE_EACH_PROCESS`, so the loops over it keep numba's own key and
-    are compiled in each process, as all composed loops were before."""
+    Every process runs the loop's cached code, compiled alone by a fresh process (module docstring), so
+    a run's bits do not depend on whether its loop was compiled or loaded in this process. (The code
+    loaded can differ from the same loop compiled in a process: the chain's implicit stepper with the
+    elastic body by 6e-15 relative in f_d, the rubber slab under the springs likewise; that is why no
+    process runs a loop it compiled itself. The chain's implicit stepper was until 2026-11-27 marked
+    to be compiled in each process instead, 38 s of compiling in every process that ran it.)"""
     cache = getattr(dispatcher, "_cache", None)
     if isinstance(cache, FunctionCache) and not isinstance(cache, StableFunctionCache):
         dispatcher._cache = StableFunctionCache(dispatcher.py_func)
@@ -185,4 +174,4 @@ def _compile_child() -> None:
     getattr(importlib.import_module(module), factory)(*args).compile(sig)
 
 
-__all__ = ["CHILD_ENV", "COMPILE_EACH_PROCESS", "StableFunctionCache", "describe", "sources_digest", "stable_cache"]
+__all__ = ["CHILD_ENV", "StableFunctionCache", "describe", "sources_digest", "stable_cache"]

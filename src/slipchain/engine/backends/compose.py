@@ -56,7 +56,7 @@ from ...model.elastic import parseval_weights
 from ...model.viscoelastic import arm_kernel
 from ..scheme import (A_WCONTACT, BODY_ROWS, A_WDAMP, A_WDRIVE, A_WVISC, FASTMATH, N_ACC, N_CACC, N_OUT, N_YS_STATE, P_AMP, P_C, P_DT,
                       P_ETAC, P_FOLD, P_KD, P_M, P_SLOW, P_VD)
-from ..jitcache import COMPILE_EACH_PROCESS, stable_cache
+from ..jitcache import stable_cache
 from . import implicit, spectral, viscoelastic
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
@@ -358,8 +358,6 @@ def implicit_stepper(explicit, commit, prony: bool = False):
             commit_be(p, mt, br, xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
             return w, fsum / n * w, w_contact, w_damp, w_drive, w_visc
 
-    if not prony:  # its loops loaded from the cache give other last bits than compiled (jitcache.stable_cache)
-        setattr(step, COMPILE_EACH_PROCESS, True)
     return step
 
 
