@@ -96,7 +96,7 @@ def test_a_run_killed_after_its_extension_resumes_bit_for_bit(extended, tmp_path
         m.setattr(ckpt.Checkpointer, "save", save)
         with pytest.raises(Crash):
             sc.run(CFG, checkpoint=path, checkpoint_every=0, progress=False)
-    resumed = sc.run(CFG, checkpoint=path, checkpoint_every=0, progress=False)
+    resumed = sc.run(CFG, checkpoint=path, progress=False)
     reference = extended.copy()
     for ds in (reference, resumed):
         for k in ("wall_time_s", "resumed_at"):
