@@ -29,9 +29,12 @@ from numba.core.dispatcher import Dispatcher
 from slipchain.engine.jitcache import StableFunctionCache, describe, stable_cache
 
 PROBE = r"""
-import hashlib, json, sys
+import hashlib, json, subprocess, sys
 from slipchain import make_config, run
 from slipchain.engine.backends import compose
+children = []  # the fresh processes this process starts to compile a loop (jitcache's subprocess.run)
+real = subprocess.run
+subprocess.run = lambda *a, **k: children.append(1) or real(*a, **k)
 CASES = {"chain": (dict(N=8, theta=0.5, integrator="fixed", dt=2e-8), ("chain", False)),
          "slab": (dict(geometry="slab", N=4, Ly=4, theta=0.5, integrator="fixed", dt=2e-8), ("slab", False)),
          "chain_adaptive": (dict(N=8, theta=0.5, integrator="adaptive", dt=2e-8), ("chain", True)),
@@ -39,21 +42,32 @@ CASES = {"chain": (dict(N=8, theta=0.5, integrator="fixed", dt=2e-8), ("chain", 
 out = {}
 for name in sys.argv[1:]:
     kw, loop = CASES[name]
+    before = len(children)
     ds = run(make_config(**kw, start="steady", t_total=2e-4, output_interval=1e-5, seed=1), progress=False)
     disp = compose.loop(*loop)
     sig = disp.signatures[0]
     out[name] = dict(hits=sum(disp.stats.cache_hits.values()), misses=sum(disp.stats.cache_misses.values()),
+                     children=len(children) - before,
                      key=repr(disp._cache._index_key(sig, disp.targetctx.codegen())[2]),
                      bits=hashlib.sha256(ds.f_d.values.tobytes() + ds.x.values.tobytes()).hexdigest())
 print(json.dumps(out))
 """
 
 
-def _probe(cache_dir, *cases):
+def _start(cache_dir, *cases):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache_dir)}
-    r = subprocess.run([sys.executable, "-c", PROBE, *cases], capture_output=True, text=True, env=env)
-    assert r.returncode == 0, r.stderr
-    return json.loads(r.stdout.strip().splitlines()[-1])
+    return subprocess.Popen([sys.executable, "-c", PROBE, *cases], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env)
+
+
+def _result(proc):
+    out, err = proc.communicate()
+    assert proc.returncode == 0, err
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def _probe(cache_dir, *cases):
+    return _result(_start(cache_dir, *cases))
 
 
 def _loaded(r):
@@ -65,11 +79,16 @@ def test_a_loop_has_the_same_bits_whatever_the_process_compiled_before_and_the_c
     first = _probe(shared, "slab", "chain_implicit")  # fills the cache with these two loops
     second = _probe(shared, "chain", "slab", "chain_implicit")
     # on an empty cache, the chain's loop first, then the slab's; and two loops of one name and argument
-    # types (compose.kernel_driver's closure), each compiled by its own fresh process, loaded by one
-    third = _probe(empty, "chain", "chain_adaptive", "slab")
+    # types (compose.kernel_driver's closure), each compiled by its own fresh process, loaded by one; beside
+    # it, at the same time, a process that asks for the slab's and the chain's loops: each loop is compiled
+    # once (the index's file lock), the process that waited loads it
+    third, beside = _start(empty, "chain", "chain_adaptive", "slab"), _start(empty, "slab", "chain")
+    third, beside = _result(third), _result(beside)
     assert _loaded(third["chain_adaptive"]) and third["chain_adaptive"]["key"] != third["chain"]["key"]
+    for name in ("chain", "slab"):
+        assert third[name]["children"] + beside[name]["children"] == 1, (name, third[name], beside[name])
     for name in ("chain", "slab", "chain_implicit"):
-        runs = [r[name] for r in (first, second, third) if name in r]
+        runs = [r[name] for r in (first, second, third, beside) if name in r]
         assert all(_loaded(r) for r in runs), (name, runs)  # a miss is compiled by a fresh process, then loaded
         assert len({r["key"] for r in runs}) == 1, name  # the same key in every process
         assert len({r["bits"] for r in runs}) == 1, (name, [r["bits"][:12] for r in runs])

@@ -52,6 +52,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from filelock import FileLock
 from numba.core.bytecode import FunctionIdentity
 from numba.core.caching import FunctionCache
 from numba.core.dispatcher import Dispatcher
@@ -112,15 +113,28 @@ class StableFunctionCache(FunctionCache):
         """The cached loop; on a miss, the loop compiled for this signature in a fresh Python process
         (:func:`_compile_child`, which writes it to the cache) and loaded from there, so that its code
         does not depend on what this process compiled before (module docstring). Where that cannot be
-        done (no recipe, the key is numba's own, the child failed), None: numba compiles it here."""
+        done (no recipe, the key is numba's own, the child failed), None: numba compiles it here.
+
+        One process at a time compiles into an index file (a file lock beside it, held across the
+        fresh process): numba's index is read, changed and written back, and a new entry's data file
+        takes the first free number, so two processes adding loops of one name at once could lose an
+        entry or write one loop's code under the other's number. A process that waited finds the loop
+        another compiled and loads it (the Dask workers of a sweep, the suite's two workers, ask for the
+        same loops at the same moment: each was compiled twice)."""
         found = super().load_overload(sig, target_context)
         if found is not None or self.recipe is None or os.environ.get(CHILD_ENV):
             return found
         if self._closure_text() is None:
             return None
-        child = subprocess.run([sys.executable, "-c", "from slipchain.engine.jitcache import _compile_child; _compile_child()"],
-                               input=pickle.dumps((self.recipe, tuple(sig))), capture_output=True,
-                               env={**os.environ, CHILD_ENV: "1"})
+        os.makedirs(self._cache_path, exist_ok=True)
+        with FileLock(self._cache_file._index_path + ".lock"):
+            found = super().load_overload(sig, target_context)  # compiled by another process meanwhile?
+            if found is not None:
+                return found
+            child = subprocess.run([sys.executable, "-c",
+                                    "from slipchain.engine.jitcache import _compile_child; _compile_child()"],
+                                   input=pickle.dumps((self.recipe, tuple(sig))), capture_output=True,
+                                   env={**os.environ, CHILD_ENV: "1"})
         if child.returncode != 0:
             warnings.warn(f"compiling {self.recipe} in a fresh process failed (exit {child.returncode}); compiled in this "
                           f"process instead, so its last bits may depend on what this process compiled before:\n"
