@@ -448,7 +448,7 @@ def test_worker_killed_mid_member_resumes_it_from_its_checkpoint(tmp_path, clien
 def test_stale_checkpoints_are_pruned(tmp_path, client):
     sw = _sweep()
     st = Store.open(tmp_path / "s", sw)
-    stale = st.checkpoint_path([waiting]).with_name("0123456789abcdef.nc")
+    stale = st.path / "checkpoints" / "0123456789abcdef.nc"
     stale.parent.mkdir()
     stale.write_bytes(b"from an earlier batching")
     rep = run_sweep(sw, st, client=client, progress=False)
