@@ -284,16 +284,26 @@ def stable_step(cfg) -> float:
 def _slab_prony_stable_step(cfg) -> float:
     """The slab under the dead weight with a Prony bulk (issue 28): the whole kernel is the bulk's,
     so the arms act through the mode's own stiffness (Bb = B); the stiffest Fourier mode and the
-    plate's uniform mode (radiation damping at the relaxed modulus, as the elastic slab's)."""
+    plate's uniform mode (radiation damping at the relaxed modulus, as the elastic slab's). Memoised
+    on those numbers (a sweep's members share them; each scan costs about 100 eigenvalue problems)."""
     from .viscoelastic import terms
 
     r, tau = terms(cfg)
-    B = np.array([[[cfg.omega_max**2]]])
-    D = np.array([[[cfg.radiation_damping_rate]]])
-    h = prony_stable_step(B, D, B, r, tau)
+    plate = None
     if cfg.dead_weight is not None:
-        Bp, Dp = plate_mode(cfg)
-        h = min(h, prony_stable_step(Bp, Dp, Bp, r, tau))
+        plate = tuple(tuple(map(float, a.ravel())) for a in plate_mode(cfg))
+    return _slab_prony_step(float(cfg.omega_max**2), float(cfg.radiation_damping_rate), tuple(map(float, r)),
+                            tuple(map(float, tau)), plate)
+
+
+@functools.lru_cache(maxsize=256)
+def _slab_prony_step(w2: float, gamma: float, r: tuple, tau: tuple, plate: tuple | None) -> float:
+    B = np.array([[[w2]]])
+    D = np.array([[[gamma]]])
+    h = prony_stable_step(B, D, B, np.asarray(r), np.asarray(tau))
+    if plate is not None:
+        Bp, Dp = (np.asarray(a).reshape(1, 2, 2) for a in plate)
+        h = min(h, prony_stable_step(Bp, Dp, Bp, np.asarray(r), np.asarray(tau)))
     return h
 
 
