@@ -60,10 +60,10 @@ def test_cuda_chunks_see_host_changes_with_fresh_or_kept_device_buffers(keep):
     states = [initial_state(s) for s in systems]
     gpu = CUDABackend(keep_buffers=keep)
     one, two = Batch.pack(systems, states), Batch.pack(systems, states)
-    o1 = gpu.advance(one, 8, 10)
-    a = gpu.advance(two, 4, 10)
+    o1 = gpu.advance(one, 4, 10)
+    a = gpu.advance(two, 2, 10)
     buffers = two.__dict__.get("_cuda_buffers")
-    b = gpu.advance(two, 4, 10)
+    b = gpu.advance(two, 2, 10)
     assert (buffers is not None and two.__dict__.get("_cuda_buffers") is buffers) if keep else buffers is None
     for name in ("x", "u", "X", "U", "ysolve", "step"):
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
@@ -71,9 +71,9 @@ def test_cuda_chunks_see_host_changes_with_fresh_or_kept_device_buffers(keep):
     np.testing.assert_allclose(o1.cacc, a.cacc + b.cacc, rtol=1e-13, atol=0)  # (sums grouped differently)
     x0 = two.x[0].copy()
     two.status[0] = two.step[0]  # finished: the kernel must skip row 0 from now on
-    gpu.advance(two, 4, 10)
+    gpu.advance(two, 2, 10)
     np.testing.assert_array_equal(two.x[0], x0)
-    assert two.step[1] == two.step[2] == 120 and two.step[0] == 80
+    assert two.step[1] == two.step[2] == 60 and two.step[0] == 40
 
 
 def test_runs_on_a_backend_match_the_cpu(backend):
