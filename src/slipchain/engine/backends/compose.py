@@ -58,6 +58,7 @@ from ..scheme import (A_WCONTACT, BODY_ROWS, A_WDAMP, A_WDRIVE, A_WVISC, FASTMAT
                       P_ETAC, P_FOLD, P_KD, P_M, P_SLOW, P_VD)
 from ..jitcache import stable_cache
 from . import implicit, spectral, viscoelastic
+from .pocketfft import fft_module
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
 from .base import N_CARRY, Batch, ChunkOutput
@@ -493,11 +494,11 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     """Advance every live row of a slab/half-space batch by n_samples*sample_steps steps
     (module docstring): per step one batched FFT, then one step of every live row by the composed
     loop (:func:`loop`, the fixed or the adaptive stepper with this body); ``fft`` the FFT
-    module (scipy.fft by default). With the adaptive step the rows advance in lock-step, one
-    accepted step per FFT (a rejected step is retried at once: the positions, hence the elastic
+    module (by default scipy.fft's transforms without its Python layer, :mod:`.pocketfft`). With the
+    adaptive step the rows advance in lock-step, one accepted step per FFT (a rejected step is retried at once: the positions, hence the elastic
     force, have not moved)."""
     if fft is None:
-        import scipy.fft as fft
+        fft = fft_module()
     b, n = batch.x.shape
     lx, ly = batch.shape
     kern = batch.kernel
@@ -615,7 +616,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
     judged by :func:`implicit_verdict`. The level, error memory and back-off go on across samples
     (``Batch.carry``, as the chain's)."""
     if fft is None:
-        import scipy.fft as fft
+        fft = fft_module()
     b, n = batch.x.shape
     spectral_body = BODIES[batch.geometry] == "spectral"
     prony = batch.material_name == "prony"

@@ -1,0 +1,97 @@
+"""scipy.fft's real 2-D transforms without its Python layer: the per-step FFTs of the slab's drivers.
+
+The slab's and half-space's drivers (:func:`.compose.fft_advance`, :func:`.compose.krylov_implicit_advance`
+and the top's :class:`.compose._TopDriver`) take one ``rfft2``/``irfft2`` pair, or more, per explicit
+step. On the grids the tester and the suite run (4 x 4 to 16 x 16) scipy.fft's Python layer (the
+uarray backend's dispatch, the argument checks and shape fixes of ``scipy.fft._pocketfft``) costs
+several times the transform itself: measured on an 8 x 8 tester run (cProfile, this project's 2-core
+AMD EPYC), 11.1 s of the 14.8 s its 100 000 ``SpectralOperator.apply_both`` calls took went to
+scipy.fft, of which 1.6 s to the transforms.
+
+:data:`FFT` calls the C++ functions that scipy.fft's pocketfft backend ends in (``pypocketfft.r2c``
+and ``c2r``, scipy >= 1.4) with the arguments scipy.fft passes them for the calls the drivers make
+(float64 input, the default norm, the half spectrum that rfft2 makes back to its grid, one thread),
+so its results are scipy.fft's to the bit; any other call is scipy.fft's own. At first use it checks
+itself against scipy.fft on a few shapes and falls back to scipy.fft wholesale where the private
+module is missing or differs (:func:`fft_module`). Bypassed with it: a scipy.fft backend a user has
+installed (``scipy.fft.set_backend``) and ``scipy.fft.set_workers`` (the drivers' grids are too small
+for threads to pay).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import scipy.fft
+
+_F64, _C128 = np.dtype(np.float64), np.dtype(np.complex128)
+
+
+def _axes(axes, ndim: int) -> list[int] | None:
+    """The two axes as scipy.fft normalises them (non-negative, distinct), or None for another request."""
+    try:
+        ax = [int(a) + ndim if int(a) < 0 else int(a) for a in axes]
+    except TypeError:
+        return None
+    if len(ax) != 2 or ax[0] == ax[1] or not all(0 <= a < ndim for a in ax):
+        return None
+    return ax
+
+
+def _plain(x, dtype) -> bool:
+    return type(x) is np.ndarray and x.dtype == dtype and x.flags.aligned and x.dtype.isnative
+
+
+class DirectFFT:
+    """``rfft2`` and ``irfft2`` with scipy.fft's signature (the arguments the drivers use), by
+    pypocketfft directly (module docstring); ``pfft`` the module ``scipy.fft._pocketfft.pypocketfft``."""
+
+    def __init__(self, pfft):
+        self._r2c, self._c2r = pfft.r2c, pfft.c2r
+
+    def rfft2(self, x, s=None, axes=(-2, -1), norm=None, overwrite_x=False, workers=None):
+        ax = _axes(axes, getattr(x, "ndim", 0)) if s is None and norm is None and workers is None else None
+        if ax is None or not _plain(x, _F64):
+            return scipy.fft.rfft2(x, s=s, axes=axes, norm=norm, overwrite_x=overwrite_x, workers=workers)
+        return self._r2c(x, ax, True, 0, None, 1)  # scipy: r2c(tmp, axes, forward, inorm 0 = 'backward', out, workers)
+
+    def irfft2(self, x, s=None, axes=(-2, -1), norm=None, overwrite_x=False, workers=None):
+        ax = _axes(axes, getattr(x, "ndim", 0)) if s is not None and norm is None and workers is None else None
+        if (ax is None or not _plain(x, _C128) or len(s) != 2 or x.shape[ax[0]] != s[0]
+                or x.shape[ax[1]] != s[1] // 2 + 1):
+            return scipy.fft.irfft2(x, s=s, axes=axes, norm=norm, overwrite_x=overwrite_x, workers=workers)
+        return self._c2r(x, ax, int(s[1]), False, 2, None, 1)  # scipy: inorm 2 - 0 for the inverse
+
+
+def _agrees(direct: DirectFFT) -> bool:
+    """Whether ``direct`` gives scipy.fft's bits on the shapes and axes the drivers use."""
+    rng = np.random.default_rng(0)
+    for shape, axes in (((8, 8), (-2, -1)), ((2, 5, 6), (1, 2)), ((2, 3, 4, 4), (2, 3)), ((3, 16, 16), (1, 2))):
+        x = rng.standard_normal(shape)
+        s = (shape[axes[0]], shape[axes[1]])
+        a, b = direct.rfft2(x, axes=axes), scipy.fft.rfft2(x, axes=axes)
+        if a.dtype != b.dtype or a.shape != b.shape or a.tobytes() != b.tobytes():
+            return False
+        a, b = direct.irfft2(b * 0.5, s=s, axes=axes), scipy.fft.irfft2(b * 0.5, s=s, axes=axes)
+        if a.dtype != b.dtype or a.shape != b.shape or a.tobytes() != b.tobytes():
+            return False
+    return True
+
+
+@functools.cache
+def fft_module():
+    """The FFT the CPU drivers use by default: :class:`DirectFFT` where it agrees with scipy.fft bit
+    for bit (checked once per process), else scipy.fft itself."""
+    try:
+        from scipy.fft._pocketfft import pypocketfft
+    except ImportError:  # a scipy whose private layout moved: the public module
+        return scipy.fft
+    direct = DirectFFT(pypocketfft)
+    try:
+        return direct if _agrees(direct) else scipy.fft
+    except Exception:  # noqa: BLE001 - a private signature that changed: the public module
+        return scipy.fft
+
+
+__all__ = ["DirectFFT", "fft_module"]
