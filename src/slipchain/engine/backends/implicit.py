@@ -534,6 +534,7 @@ class SpectralOperator:
         self.fft = fft
         self.n = shape[0] * shape[1]
         self.k0 = float(kern[0, 0])
+        self._pair = np.empty((2, self.n))  # apply_both's input
         delta = np.zeros(self.n)
         delta[0] = 1.0
         self.lii = float(self.apply(delta)[0])  # the diagonal of the circulant L
@@ -548,10 +549,12 @@ class SpectralOperator:
         return f.irfft2(sym * f.rfft2(v.reshape(self.shape)), s=self.shape).reshape(self.n)
 
     def apply_both(self, v: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(L v, L w) by one batched rfft2/irfft2 pair (half the calls' overhead on small grids)."""
+        """(L v, L w) by one batched rfft2/irfft2 pair (half the calls' overhead on small grids; v and w
+        copied into a pair kept for the purpose, as np.stack would into a new one)."""
         f = self.fft
-        both = f.irfft2(self.kern * f.rfft2(np.stack([v, w]).reshape((2, *self.shape)), axes=(1, 2)), s=self.shape,
-                        axes=(1, 2))
+        pair = self._pair
+        pair[0], pair[1] = v, w
+        both = f.irfft2(self.kern * f.rfft2(pair.reshape((2, *self.shape)), axes=(1, 2)), s=self.shape, axes=(1, 2))
         return both[0].reshape(self.n), both[1].reshape(self.n)
 
     def energy(self, x: np.ndarray, lx: np.ndarray, d: float) -> float:

@@ -21,6 +21,7 @@ for threads to pay).
 from __future__ import annotations
 
 import functools
+import operator
 
 import numpy as np
 import scipy.fft
@@ -28,12 +29,27 @@ import scipy.fft
 _F64, _C128 = np.dtype(np.float64), np.dtype(np.complex128)
 
 
+_AXES: dict = {}  # (axes, ndim) -> _axes' answer: the drivers ask for the same few (tuples of ints)
+
+
 def _axes(axes, ndim: int) -> list[int] | None:
     """The two axes as scipy.fft normalises them (non-negative, distinct), or None for another request."""
     try:
-        ax = [int(a) + ndim if int(a) < 0 else int(a) for a in axes]
+        return _AXES[axes, ndim]
+    except (KeyError, TypeError):  # not seen yet, or not hashable (a list)
+        pass
+    ax = _normalise(axes, ndim)
+    if ax is not None and type(axes) is tuple:
+        _AXES[axes, ndim] = ax
+    return ax
+
+
+def _normalise(axes, ndim: int) -> list[int] | None:
+    try:
+        ax = [operator.index(a) for a in axes]
     except TypeError:
         return None
+    ax = [a + ndim if a < 0 else a for a in ax]
     if len(ax) != 2 or ax[0] == ax[1] or not all(0 <= a < ndim for a in ax):
         return None
     return ax
