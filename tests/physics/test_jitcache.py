@@ -21,6 +21,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numba as nb
 from numba.core.caching import NullCache
@@ -75,8 +76,10 @@ def _loaded(r):
 
 
 def test_a_loop_has_the_same_bits_whatever_the_process_compiled_before_and_the_cache_held(tmp_path):
-    shared, empty = tmp_path / "shared", tmp_path / "empty"
-    first = _probe(shared, "slab", "chain_implicit")  # fills the cache with these two loops
+    # the suite's own cache (conftest's NUMBA_CACHE_DIR, shared by both xdist workers): these loops are compiled
+    # there once for the whole suite, by whichever process needs them first; and an empty one
+    shared, empty = Path(os.environ["NUMBA_CACHE_DIR"]), tmp_path / "empty"
+    first = _probe(shared, "slab", "chain_implicit")  # loads these two loops, compiling those the cache lacks
     second = _probe(shared, "chain", "slab", "chain_implicit")
     # on an empty cache, the chain's loop first, then the slab's; and two loops of one name and argument
     # types (compose.kernel_driver's closure), each compiled by its own fresh process, loaded by one; beside
