@@ -8,7 +8,7 @@ several times the transform itself: measured on an 8 x 8 tester run (cProfile, t
 AMD EPYC), 11.1 s of the 14.8 s its 100 000 ``SpectralOperator.apply_both`` calls took went to
 scipy.fft, of which 1.6 s to the transforms.
 
-:data:`FFT` calls the C++ functions that scipy.fft's pocketfft backend ends in (``pypocketfft.r2c``
+:class:`DirectFFT` calls the C++ functions that scipy.fft's pocketfft backend ends in (``pypocketfft.r2c``
 and ``c2r``, scipy >= 1.4) with the arguments scipy.fft passes them for the calls the drivers make
 (float64 input, the default norm, the half spectrum that rfft2 makes back to its grid, one thread),
 so its results are scipy.fft's to the bit; any other call is scipy.fft's own. At first use it checks
@@ -24,7 +24,6 @@ import functools
 import operator
 
 import numpy as np
-import scipy.fft
 
 _F64, _C128 = np.dtype(np.float64), np.dtype(np.complex128)
 
@@ -61,27 +60,33 @@ def _plain(x, dtype) -> bool:
 
 class DirectFFT:
     """``rfft2`` and ``irfft2`` with scipy.fft's signature (the arguments the drivers use), by
-    pypocketfft directly (module docstring); ``pfft`` the module ``scipy.fft._pocketfft.pypocketfft``."""
+    pypocketfft directly (module docstring); ``pfft`` the module ``scipy.fft._pocketfft.pypocketfft``.
+    (scipy.fft is imported when this is made, not with the package: 0.25 s that a chain's run needs not.)"""
 
     def __init__(self, pfft):
+        import scipy.fft
+
         self._r2c, self._c2r = pfft.r2c, pfft.c2r
+        self._scipy = scipy.fft
 
     def rfft2(self, x, s=None, axes=(-2, -1), norm=None, overwrite_x=False, workers=None):
         ax = _axes(axes, getattr(x, "ndim", 0)) if s is None and norm is None and workers is None else None
         if ax is None or not _plain(x, _F64):
-            return scipy.fft.rfft2(x, s=s, axes=axes, norm=norm, overwrite_x=overwrite_x, workers=workers)
+            return self._scipy.rfft2(x, s=s, axes=axes, norm=norm, overwrite_x=overwrite_x, workers=workers)
         return self._r2c(x, ax, True, 0, None, 1)  # scipy: r2c(tmp, axes, forward, inorm 0 = 'backward', out, workers)
 
     def irfft2(self, x, s=None, axes=(-2, -1), norm=None, overwrite_x=False, workers=None):
         ax = _axes(axes, getattr(x, "ndim", 0)) if s is not None and norm is None and workers is None else None
         if (ax is None or not _plain(x, _C128) or len(s) != 2 or x.shape[ax[0]] != s[0]
                 or x.shape[ax[1]] != s[1] // 2 + 1):
-            return scipy.fft.irfft2(x, s=s, axes=axes, norm=norm, overwrite_x=overwrite_x, workers=workers)
+            return self._scipy.irfft2(x, s=s, axes=axes, norm=norm, overwrite_x=overwrite_x, workers=workers)
         return self._c2r(x, ax, int(s[1]), False, 2, None, 1)  # scipy: inorm 2 - 0 for the inverse
 
 
 def _agrees(direct: DirectFFT) -> bool:
     """Whether ``direct`` gives scipy.fft's bits on the shapes and axes the drivers use."""
+    import scipy.fft
+
     rng = np.random.default_rng(0)
     for shape, axes in (((8, 8), (-2, -1)), ((2, 5, 6), (1, 2)), ((2, 3, 4, 4), (2, 3)), ((3, 16, 16), (1, 2))):
         x = rng.standard_normal(shape)
@@ -99,6 +104,8 @@ def _agrees(direct: DirectFFT) -> bool:
 def fft_module():
     """The FFT the CPU drivers use by default: :class:`DirectFFT` where it agrees with scipy.fft bit
     for bit (checked once per process), else scipy.fft itself."""
+    import scipy.fft
+
     try:
         from scipy.fft._pocketfft import pypocketfft
     except ImportError:  # a scipy whose private layout moved: the public module
