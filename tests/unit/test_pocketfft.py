@@ -51,7 +51,11 @@ def test_other_calls_are_scipy_fft_s_own():
     for args, kw in (((x.astype(np.float32),), {}), ((x,), dict(s=(8, 8))), ((x,), dict(norm="ortho")),
                      ((x,), dict(axes=(0, 1))), ((x.tolist(),), {})):
         assert _same(d.rfft2(*args, **kw), scipy.fft.rfft2(*args, **kw)), kw
-    for kw in (dict(s=(6, 5)), dict(s=(6, 4)), dict(s=(5, 5)), dict(s=(6, 5), norm="forward"), {}):
+    for kw in (dict(s=(6, 5)), dict(s=(6, 4)), dict(s=(5, 5)), dict(s=[6, 5]), dict(s=(6, 5), norm="forward"), {}):
         assert _same(d.irfft2(spec, **kw), scipy.fft.irfft2(spec, **kw)), kw
     with pytest.raises(TypeError):  # complex input to the real transform: scipy.fft's error
         d.rfft2(spec)
+    with pytest.raises(ValueError):  # one size for two axes: scipy.fft's error
+        d.irfft2(spec, s=6)
+    with pytest.raises(ValueError):
+        scipy.fft.irfft2(spec, s=6)

@@ -76,9 +76,9 @@ class DirectFFT:
         return self._r2c(x, ax, True, 0, None, 1)  # scipy: r2c(tmp, axes, forward, inorm 0 = 'backward', out, workers)
 
     def irfft2(self, x, s=None, axes=(-2, -1), norm=None, overwrite_x=False, workers=None):
-        ax = _axes(axes, getattr(x, "ndim", 0)) if s is not None and norm is None and workers is None else None
-        if (ax is None or not _plain(x, _C128) or len(s) != 2 or x.shape[ax[0]] != s[0]
-                or x.shape[ax[1]] != s[1] // 2 + 1):
+        plain = type(s) is tuple and len(s) == 2 and norm is None and workers is None
+        ax = _axes(axes, getattr(x, "ndim", 0)) if plain else None
+        if ax is None or not _plain(x, _C128) or x.shape[ax[0]] != s[0] or x.shape[ax[1]] != s[1] // 2 + 1:
             return self._scipy.irfft2(x, s=s, axes=axes, norm=norm, overwrite_x=overwrite_x, workers=workers)
         return self._c2r(x, ax, int(s[1]), False, 2, None, 1)  # scipy: inorm 2 - 0 for the inverse
 
