@@ -495,8 +495,8 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     (module docstring): per step one batched FFT, then one step of every live row by the composed
     loop (:func:`loop`, the fixed or the adaptive stepper with this body); ``fft`` the FFT
     module (by default scipy.fft's transforms without its Python layer, :mod:`.pocketfft`). With the
-    adaptive step the rows advance in lock-step, one accepted step per FFT (a rejected step is retried at once: the positions, hence the elastic
-    force, have not moved)."""
+    adaptive step the rows advance in lock-step, one accepted step per FFT (a rejected step is retried
+    at once: the positions, hence the elastic force, have not moved)."""
     if fft is None:
         fft = fft_module()
     b, n = batch.x.shape

@@ -9,11 +9,11 @@ AMD EPYC), 11.1 s of the 14.8 s its 100 000 ``SpectralOperator.apply_both`` call
 scipy.fft, of which 1.6 s to the transforms.
 
 :class:`DirectFFT` calls the C++ functions that scipy.fft's pocketfft backend ends in (``pypocketfft.r2c``
-and ``c2r``, scipy >= 1.4) with the arguments scipy.fft passes them for the calls the drivers make
+and ``c2r``, as scipy 1.17 calls them) with the arguments scipy.fft passes them for the calls the drivers make
 (float64 input, the default norm, the half spectrum that rfft2 makes back to its grid, one thread),
 so its results are scipy.fft's to the bit; any other call is scipy.fft's own. At first use it checks
 itself against scipy.fft on a few shapes and falls back to scipy.fft wholesale where the private
-module is missing or differs (:func:`fft_module`). Bypassed with it: a scipy.fft backend a user has
+module is missing or differs, as it may in another scipy (:func:`fft_module`). Bypassed with it: a scipy.fft backend a user has
 installed (``scipy.fft.set_backend``) and ``scipy.fft.set_workers`` (the drivers' grids are too small
 for threads to pay).
 """
