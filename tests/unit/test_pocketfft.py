@@ -39,6 +39,8 @@ def test_rfft2_and_irfft2_are_scipy_fft_to_the_bit(batch, lx, ly, seed, scale):
         assert _same(spec, scipy.fft.rfft2(x, axes=ax))
         assert _same(d.irfft2(spec * 1.5, s=(lx, ly), axes=ax), scipy.fft.irfft2(spec * 1.5, s=(lx, ly), axes=ax))
     assert _same(d.rfft2(x[..., ::2, :], axes=ax), scipy.fft.rfft2(x[..., ::2, :], axes=ax))  # a strided view
+    swapped = x.astype(x.dtype.newbyteorder())  # the same values in the other byte order: scipy.fft's way
+    assert _same(d.rfft2(swapped, axes=ax), scipy.fft.rfft2(swapped, axes=ax))
 
 
 def test_other_calls_are_scipy_fft_s_own():
