@@ -8,8 +8,15 @@
 # comes back as a tarball in $OUT, split into parts of 15 MiB (the device returns at most 8 files of
 # 16 MiB each, 64 MiB in all: a 15-member rubber store of 21.8 MB did not come back whole). Here:
 # cat store.tgz.* | tar xz. Machine, versions and the sweep's start and end times go to machine.txt.
+# FROM=stores/NAME (a store in the working tree, which travels) continues that store instead of a fresh
+# one: its finished members are kept and its runs in flight resume from their checkpoints. To carry on
+# here, copy the returned store's checkpoints/*.nc and new members/*.nc into the local store (the
+# checkpoint format is the same on every machine; a run resumed across machines is not bit-identical
+# to one computed on one machine, as results across CPUs never are: compare them statistically).
+# e.g. FROM=stores/tester-16-slower benchmarks/device_sweep.sh tester-16-slower 520 12 --only t_ramp=6.0
 set -u
 sweep=$1; limit=$2; workers=${3:-$(nproc)}; shift $(( $# < 3 ? $# : 3 ))
+if [ -n "${FROM:-}" ]; then rm -rf /tmp/store && cp -r "$FROM" /tmp/store || exit 3; fi
 [ -d /tmp/site/numpy ] || python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 3
 export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1 NUMBA_CACHE_DIR=/tmp/numba-cache
 out=${OUT:-/tmp/out}; mkdir -p "$out"
