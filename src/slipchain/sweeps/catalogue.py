@@ -82,7 +82,7 @@ CATALOGUE: dict[str, Study] = {
                            "tester-16's lowest load at dt = 5e-8 s"),
     "tester-16-slow": Study("study", 25, "1 h 44 min", "docs/tester-3d/index.md",
                             "tester-16 in the slow-loading limit: the weight raised over 1 s and 3 s (the implicit step)"),
-    "tester-16-slower": Study("study", 24, "4 of 24 run (2 300-4 700 s each, 2 at a time); the rest est. 6-10 h", "docs/tester-3d/index.md",
+    "tester-16-slower": Study("study", 24, "17 of 24 run (700-7 300 s each, 2 at a time; part on 16 CPUs)", "docs/tester-3d/index.md",
                               "tester-16-slow at heavier weights and a 6-s ramp: where the slowly loaded block runs away"),
     "tester-16-finer": Study("study", 5, "running (2026-11-27)", "docs/tester-3d/index.md",
                              "tester-16-slower's 6-s ramp at mu_a = 1.00, the midpoint of its bracket"),
