@@ -94,3 +94,48 @@ def cli_stopping_after_members():
     import sys
 
     return lambda k: [sys.executable, "-c", _STOP_AFTER_MEMBERS, str(k)]
+
+
+@dataclass(frozen=True)
+class CliResult:
+    """What a ``slipchain`` command gave, under subprocess.CompletedProcess's names."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+@pytest.fixture
+def slipchain_cli():
+    """``(*args, cwd=None, env=None) -> CliResult``: ``slipchain ARGS`` run in this process by typer's
+    runner: the same app, parsing, exit code and streams as the command, without a new Python (whose
+    imports cost about 3 s a call here, over a third of some tests' time). For commands that compute in
+    this process (figures, tables, analyses, single runs, rejected input); commands that start worker
+    processes (sweep, reproduce, mu-max's bisections) or whose test is about the process (signals, a
+    fresh process's bits) keep ``subprocess``. What a command installs in its process (the SIGTERM
+    handler, the warning display) is put back after it, and an exception other than an exit comes back
+    with its traceback in ``stderr``, as the command would print it."""
+    import signal
+    import traceback
+    import warnings
+
+    from typer.testing import CliRunner
+
+    from slipchain.cli import app
+
+    def invoke(*args, cwd=None, env=None) -> CliResult:
+        term, show, here = signal.getsignal(signal.SIGTERM), warnings.showwarning, os.getcwd()
+        try:
+            if cwd is not None:
+                os.chdir(cwd)
+            r = CliRunner().invoke(app, [str(a) for a in args], env=env, prog_name="slipchain")
+        finally:
+            os.chdir(here)
+            signal.signal(signal.SIGTERM, term)
+            warnings.showwarning = show
+        stderr = r.stderr
+        if r.exc_info is not None and not isinstance(r.exception, SystemExit):
+            stderr += "".join(traceback.format_exception(*r.exc_info))
+        return CliResult(r.exit_code, r.stdout, stderr)
+
+    return invoke

@@ -1,7 +1,5 @@
 """Stick-slip classifier, slip events, spectra and field recordings."""
 
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
@@ -127,7 +125,7 @@ def test_field_recording_agrees_with_the_run_it_continues():
                                                          rel=1e-5)
 
 
-def test_mechanism_cli_on_a_small_store(tmp_path):
+def test_mechanism_cli_on_a_small_store(tmp_path, slipchain_cli):
     sw = make_sweep({"name": "m", "base": {"N": 31, "start": "steady", "t_total": 4e-3},
                      "grid": {"theta": [0.2, 1.0], "v_d": [1e-3, 3e-4], "seed": [0]}})
     st = Store.open(tmp_path / "s", sw)
@@ -135,20 +133,16 @@ def test_mechanism_cli_on_a_small_store(tmp_path):
         ds = run(m.config)
         ds.attrs["status"] = "completed"  # short runs: the physics checks are beside the point here
         st.write_member(m, ds)
-    py = [sys.executable, "-m", "slipchain"]
-    ana = subprocess.run(py + ["mechanism", "--store", str(tmp_path / "s"), "--duration", "2e-4"],
-                         capture_output=True, text=True, timeout=300)
+    ana = slipchain_cli("mechanism", "--store", tmp_path / "s", "--duration", "2e-4")
     assert ana.returncode == 0, ana.stderr
     assert len(list((tmp_path / "s" / "mechanism").glob("*.nc"))) == 4
-    fig = subprocess.run(py + ["figure", "mechanism", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o")],
-                         capture_output=True, text=True, timeout=300)
+    fig = slipchain_cli("figure", "mechanism", "--store", tmp_path / "s", "--out", tmp_path / "o")
     assert fig.returncode == 0, fig.stderr
     text = (tmp_path / "o" / "mechanism.md").read_text()
     assert "Fraction of contacts that stick-slip" in text and text.count("| v_d = ") == 4
     for stem in ("mechanism_stick_slip", "mechanism_contacts_events_spectra", "mechanism_force_spectra"):
         assert (tmp_path / "o" / f"{stem}.png").stat().st_size > 5000
-    missing = subprocess.run(py + ["figure", "mechanism", "--store", str(tmp_path / "nope"), "--out", str(tmp_path)],
-                             capture_output=True, text=True, timeout=120)
+    missing = slipchain_cli("figure", "mechanism", "--store", tmp_path / "nope", "--out", tmp_path)
     assert missing.returncode == 2 and "not a slipchain sweep store" in missing.stderr
 
 
@@ -161,26 +155,26 @@ def _tiny_store(path, grids, base=None):
     return st
 
 
-def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
-    py = [sys.executable, "-m", "slipchain", "figure"]
+def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path, slipchain_cli):
+    def figure(*args):
+        return slipchain_cli("figure", *args)
+
     _tiny_store(tmp_path / "vel", {"v_d": [1e-4, 1e-3], "theta": [0.5, 1.0], "seed": [0, 1]})
     eps_store = _tiny_store(tmp_path / "eps", [{"epsilon": [1e-2], "dt": [2e-8], "theta": [0.5, 1.0], "seed": [0]},
                                    {"epsilon": [5e-3], "dt": [1e-8], "theta": [0.5, 1.0], "seed": [0]}])
     _tiny_store(tmp_path / "dw", {"dead_weight": [0.5, 0.9, 1.05], "theta": [1.0]},
                 base={"N": 3, "theta": 1 / 3, "delta": 0.0, "t_total": 4e-3})
-    vel = subprocess.run(py + ["velocity", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o")],
-                         capture_output=True, text=True, timeout=120)
+    vel = figure("velocity", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o"))
     assert vel.returncode == 0, vel.stderr
-    eps = subprocess.run(py + ["epsilon", "--store", str(tmp_path / "eps"), "--out", str(tmp_path / "o")],
-                         capture_output=True, text=True, timeout=120)
+    eps = figure("epsilon", "--store", str(tmp_path / "eps"), "--out", str(tmp_path / "o"))
     assert eps.returncode == 0, eps.stderr
     assert "epsilon = 0.01:" in eps.stdout and "epsilon = 0.005:" in eps.stdout and "ratio" in eps.stdout
     # issue 12: the figure extended by a store at another base epsilon (rows at v_d = v0 only) and an index CSV
     eps_store.write_index()
     _tiny_store(tmp_path / "eps2", {"v_d": [0.01, 0.003], "theta": [0.5, 1.0], "seed": [0]},
                 base={"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3, "epsilon": 2e-3})
-    both = subprocess.run(py + ["epsilon", "--store", str(tmp_path / "eps2"), "--index", str(tmp_path / "eps" / "index.csv"),
-                                "--out", str(tmp_path / "o2")], capture_output=True, text=True, timeout=120)
+    both = figure("epsilon", "--store", str(tmp_path / "eps2"), "--index", str(tmp_path / "eps" / "index.csv"),
+                                "--out", str(tmp_path / "o2"))
     assert both.returncode == 0, both.stderr
     lines = [line for line in both.stdout.splitlines() if line.startswith("epsilon = ")]
     assert [line.split(":")[0] for line in lines] == ["epsilon = 0.002", "epsilon = 0.005", "epsilon = 0.01"]
@@ -188,26 +182,23 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
     rows = pd.read_csv(tmp_path / "o2" / "epsilon-index.csv")
     assert len(rows) == 6 and sorted(rows["epsilon"].unique()) == [0.002, 0.005, 0.01]
     assert (tmp_path / "o2" / "epsilon.png").stat().st_size > 5000
-    twice = subprocess.run(py + ["epsilon", "--store", str(tmp_path / "eps"), "--index", str(tmp_path / "eps" / "index.csv"),
-                                 "--out", str(tmp_path / "o3")], capture_output=True, text=True, timeout=120)
+    twice = figure("epsilon", "--store", str(tmp_path / "eps"), "--index", str(tmp_path / "eps" / "index.csv"),
+                                 "--out", str(tmp_path / "o3"))
     assert twice.returncode == 2 and "same (epsilon, dt, theta, seed)" in twice.stderr and not (tmp_path / "o3").exists()
-    nofile = subprocess.run(py + ["epsilon", "--index", str(tmp_path / "none.csv"), "--out", str(tmp_path / "o3")],
-                            capture_output=True, text=True, timeout=120)
+    nofile = figure("epsilon", "--index", str(tmp_path / "none.csv"), "--out", str(tmp_path / "o3"))
     assert nofile.returncode == 2 and "none.csv" in nofile.stderr and not (tmp_path / "o3").exists()
-    dw = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--out", str(tmp_path / "o")],
-                        capture_output=True, text=True, timeout=120)
+    dw = figure("dead-weight", "--store", str(tmp_path / "dw"), "--out", str(tmp_path / "o"))
     assert dw.returncode == 0, dw.stderr
     for stem in ("velocity", "epsilon", "dead_weight"):
         assert (tmp_path / "o" / f"{stem}.png").stat().st_size > 5000 and (tmp_path / "o" / f"{stem}.pdf").exists()
-    wrong = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o")],
-                           capture_output=True, text=True, timeout=120)
+    wrong = figure("dead-weight", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o"))
     assert wrong.returncode == 2 and "needs dead_weight" in wrong.stderr
     # issue 29: grid stores side by side, one panel per value of a config key that one store does not
     # vary (its base value) and the other leaves absent (the weight at once); their rows in evaluations.csv
     _tiny_store(tmp_path / "dw2", {"dead_weight": [0.5, 1.05], "theta": [1.0, 0.5]},
                 base={"N": 3, "theta": 1 / 3, "delta": 0.0, "t_total": 4e-3, "dead_weight": 0.5, "t_ramp": 1e-3})
-    grid = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
-                                "--by", "t_ramp", "--out", str(tmp_path / "g")], capture_output=True, text=True, timeout=120)
+    grid = figure("dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
+                                "--by", "t_ramp", "--out", str(tmp_path / "g"))
     assert grid.returncode == 0, grid.stderr
     rows = pd.read_csv(tmp_path / "g" / "evaluations.csv")
     assert len(rows) == 3 + 4 and rows.groupby("store")["t_ramp"].unique().map(list).to_dict() == {
@@ -219,8 +210,8 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
     assert (tmp_path / "g" / "dead_weight_grid.png").stat().st_size > 5000
     # a table of such rows (a grid whose store is elsewhere) beside a store: read as it was written
     rows[rows["store"] == "dw2"].drop(columns="store").to_csv(tmp_path / "dw2.csv", index=False)
-    mixed = subprocess.run(py + ["dead-weight", "--table", str(tmp_path / "dw2.csv"), "--store", str(tmp_path / "dw"),
-                                 "--by", "t_ramp", "--out", str(tmp_path / "g3")], capture_output=True, text=True, timeout=120)
+    mixed = figure("dead-weight", "--table", str(tmp_path / "dw2.csv"), "--store", str(tmp_path / "dw"),
+                                 "--by", "t_ramp", "--out", str(tmp_path / "g3"))
     assert mixed.returncode == 0, mixed.stderr
     again = pd.read_csv(tmp_path / "g3" / "evaluations.csv")
 
@@ -230,8 +221,8 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path):
     rows.drop(columns="t_ramp").to_csv(tmp_path / "no_ramp.csv", index=False)
     for bad, says in ((["--by", "t_rampp"], "'t_rampp' is not a config key"), ([], "several with --by"),
                       (["--by", "t_ramp", "--table", str(tmp_path / "no_ramp.csv")], "has no column 't_ramp'")):
-        r = subprocess.run(py + ["dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
-                                 *bad, "--out", str(tmp_path / "g2")], capture_output=True, text=True, timeout=120)
+        r = figure("dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
+                                 *bad, "--out", str(tmp_path / "g2"))
         assert r.returncode == 2 and says in r.stderr and not (tmp_path / "g2").exists(), r.stderr
 
 

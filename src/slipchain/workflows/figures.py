@@ -148,7 +148,7 @@ def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.Pat
         if missing:
             raise ConfigError(f"table {os.fspath(t)!r} has no column {missing[0]!r}; expected the rows of "
                               f"store_evaluations with a column {by!r} (the value its runs had)")
-        sources.append((Path(t).name, d.assign(message=d.get("message", pd.Series("", index=d.index)).fillna(""))))
+        sources.append((Path(t).name, d.assign(message=d.get("message", pd.Series("", index=d.index)).astype(object).fillna(""))))
     sources += [(Path(st).name, store_evaluations(st, (by,))) for st in stores]
     parts, lines = [], []
     for name, ev in sources:
