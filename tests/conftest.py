@@ -139,3 +139,24 @@ def slipchain_cli():
         return CliResult(r.exit_code, r.stdout, stderr)
 
     return invoke
+
+
+@pytest.fixture
+def store_of_runs():
+    """``(path, sweep) -> Store``: a sweep's store whose members are run in this process, one after the
+    other, and written as the sweep's tasks write them (``slipchain.run`` is bit for bit a member run on
+    a worker: tests/workflows/test_runner.py). For tests of what reads a store; the sweeps on Dask are
+    test_runner's. ``sweep``: a SweepDefinition, or the path of its TOML."""
+    from slipchain import run
+    from slipchain.sweeps.definition import load_sweep_definition
+    from slipchain.sweeps.store import Store
+
+    def make(path, sweep):
+        if isinstance(sweep, (str, os.PathLike)):
+            sweep = load_sweep_definition(sweep)
+        st = Store.open(path, sweep)
+        for m in sweep.members:
+            st.write_member(m, run(m.config))
+        return st
+
+    return make

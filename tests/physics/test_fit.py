@@ -4,8 +4,6 @@ failure modes through the CLI."""
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
@@ -79,14 +77,11 @@ def _model_dir(path, thetas=(0.1, 0.3, 1.0), r=(1.0, 0.93, 0.85)):
     return path
 
 
-def test_cli_synth_analyze_fit_recovers_the_truth_and_bad_input_exits_2(tmp_path):
+def test_cli_synth_analyze_fit_recovers_the_truth_and_bad_input_exits_2(tmp_path, slipchain_cli):
     model = _model_dir(tmp_path / "model")
     assert np.allclose(model_maxima(model).r, PLANTED_R.r)
 
-    def cli(*args):
-        return subprocess.run([sys.executable, "-m", "slipchain", *map(str, args)], capture_output=True, text=True,
-                              timeout=300)
-
+    cli = slipchain_cli
     r = cli("tester", "synth", "--model", model, "--seed", 1, "--out", tmp_path / "s")
     assert r.returncode == 0, r.stderr
     assert json.loads((tmp_path / "s" / "planted.json").read_text())["p_ref"] == 60e3

@@ -121,7 +121,7 @@ def test_a_round_is_a_sweep_whose_members_are_its_runs():
     assert make_sweep(tomllib.loads(sweep.to_toml())).digest == sweep.digest  # the store's sweep.toml reads back
 
 
-def test_cli_mu_max_writes_the_table_and_refuses_bad_input_with_exit_2(tmp_path):
+def test_cli_mu_max_writes_the_table_and_refuses_bad_input_with_exit_2(tmp_path, slipchain_cli):
     import subprocess
     import sys
 
@@ -139,8 +139,7 @@ def test_cli_mu_max_writes_the_table_and_refuses_bad_input_with_exit_2(tmp_path)
     assert summary["seeds"].tolist() == [2] and summary["ratio_to_theta_min"].tolist() == [1.0]
     for bad, words in ((["--theta", "1.5"], "theta"), (["--set", "t_total=0"], "t_total"),
                        (["--set", "t_total=0.0", "--set", "t_decide=0.0"], "t_")):
-        rej = subprocess.run([sys.executable, "-m", "slipchain", "mu-max", *base, *bad, "--out", str(tmp_path / "x")],
-                             capture_output=True, text=True, timeout=120)
+        rej = slipchain_cli("mu-max", *base, *bad, "--out", tmp_path / "x")
         assert rej.returncode == 2 and rej.stderr.startswith("error:") and words in rej.stderr, rej.stderr
         assert not (tmp_path / "x").exists()
 
@@ -253,7 +252,7 @@ def test_t_decide_and_t_ramp_absent_leave_member_ids_unchanged():
     assert member_id(cfg) == "be3a6b1c23568497"
 
 
-def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_path):
+def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_path, slipchain_cli):
     """A plan file ([base] + [bisection] with curve points) through `slipchain mu-max`, resumed from
     its stores, then `slipchain figure mu-max` (a real figure and report) and a bad plan key."""
     import subprocess
@@ -284,25 +283,23 @@ def test_cli_mu_max_plan_with_automatic_length_then_its_figure_and_report(tmp_pa
     r2 = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert r2.returncode == 0 and (out / "mu_max.csv").read_text() == before
     fig = tmp_path / "fig"
-    r3 = subprocess.run([sys.executable, "-m", "slipchain", "figure", "mu-max", "--from", str(out), "--out", str(fig)],
-                        capture_output=True, text=True, timeout=300)
+    r3 = slipchain_cli("figure", "mu-max", "--from", out, "--out", fig)
     assert r3.returncode == 0, r3.stderr
     assert (fig / "mu_max.png").stat().st_size > 10_000 and (fig / "mu_max.pdf").exists()
     report = (fig / "report.md").read_text()
     assert f"{table['mu_max'].mean():.4f}" in report and "| 1 | 2/2 |" in report
     # failure modes: an unknown plan key, and a result directory that is not one: exit 2, nothing written
     plan.write_text(plan.read_text().replace("seeds = 2", "seedz = 2"))
-    bad = subprocess.run([*cmd[:-1], str(tmp_path / "y")], capture_output=True, text=True, timeout=120)
+    bad = slipchain_cli(*cmd[3:-1], tmp_path / "y")
     assert bad.returncode == 2 and "seedz" in bad.stderr and not (tmp_path / "y").exists()
     good = plan.read_text().replace("seedz = 2", "seeds = 2")
     for body, words in ((good.replace("seeds = 2", "seeds = 1.5"), "'seeds' has value 1.5"),
                         (good.replace("seeds = 2", "seeds = true"), "'seeds' has value True"),
                         ("[bass]\nN = 3\n" + good, "unknown table(s)/key(s) ['bass']")):
         plan.write_text(body)
-        bad = subprocess.run([*cmd[:-1], str(tmp_path / "y")], capture_output=True, text=True, timeout=120)
+        bad = slipchain_cli(*cmd[3:-1], tmp_path / "y")
         assert bad.returncode == 2 and words in bad.stderr and not (tmp_path / "y").exists(), bad.stderr
-    bad = subprocess.run([sys.executable, "-m", "slipchain", "figure", "mu-max", "--from", str(tmp_path),
-                          "--out", str(tmp_path / "z")], capture_output=True, text=True, timeout=120)
+    bad = slipchain_cli("figure", "mu-max", "--from", tmp_path, "--out", tmp_path / "z")
     assert bad.returncode == 2 and "mu_max_summary.csv" in bad.stderr and not (tmp_path / "z").exists()
 
 

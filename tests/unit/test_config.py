@@ -1,8 +1,6 @@
 """Validation: every bad input named with key, value and what is allowed; the CLI writes nothing."""
 
 import math
-import subprocess
-import sys
 
 import pytest
 
@@ -87,10 +85,9 @@ def test_config_is_frozen():
         c.theta = 0.5
 
 
-def test_cli_rejects_bad_config_and_writes_nothing(tmp_path):
+def test_cli_rejects_bad_config_and_writes_nothing(tmp_path, slipchain_cli):
     out = tmp_path / "r.nc"
-    proc = subprocess.run([sys.executable, "-m", "slipchain", "run", "--set", "theta=1.5", "--out", str(out)],
-                          capture_output=True, text=True)
+    proc = slipchain_cli("run", "--set", "theta=1.5", "--out", out)
     assert proc.returncode == 2
     assert "'theta'" in proc.stderr and "1.5" in proc.stderr and "(0, 1]" in proc.stderr
     assert not out.exists() and list(tmp_path.iterdir()) == []

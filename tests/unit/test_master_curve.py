@@ -3,8 +3,6 @@ the fit recovers planted terms, does not depend on the file's unit, writes a val
 files are refused naming what is wrong, with nothing written; ``material show`` obeys
 time-temperature superposition."""
 
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -16,10 +14,6 @@ from slipchain.model.viscoelastic import DEFAULT_COMPOUND, shift_factor, storage
 pytest.importorskip("pyvisco")  # installed by make (requirements-nodeps.txt)
 
 FREQ = np.geomspace(1e-4, 1e12, 161)  # wide enough to reach both plateaus of the default compound
-
-
-def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "slipchain", *args], capture_output=True, text=True)
 
 
 def _write(path, E_inf, E, tau, unit="MPa", freq=FREQ):
@@ -61,9 +55,9 @@ def test_fit_does_not_depend_on_the_unit_of_the_file(tmp_path, unit):
     assert a.E_inf == pytest.approx(b.E_inf, rel=3e-3)
 
 
-def test_material_fit_writes_a_config_that_runs_the_fitted_compound(tmp_path):
+def test_material_fit_writes_a_config_that_runs_the_fitted_compound(tmp_path, slipchain_cli):
     master = _write(tmp_path / "m.csv", 10e6, DEFAULT_COMPOUND.E, DEFAULT_COMPOUND.tau)
-    proc = _cli("material", "fit", str(master), "--T-ref", "15", "--C1", "8", "--C2", "120", "--out", str(tmp_path / "o"))
+    proc = slipchain_cli("material", "fit", str(master), "--T-ref", "15", "--C1", "8", "--C2", "120", "--out", str(tmp_path / "o"))
     assert proc.returncode == 0, proc.stderr
     assert {p.name for p in (tmp_path / "o").iterdir()} == {"compound.toml", "master_curve_fit.png", "master_curve_fit.pdf"}
     cfg = load_config(tmp_path / "o" / "compound.toml")
@@ -79,9 +73,9 @@ def test_material_fit_writes_a_config_that_runs_the_fitted_compound(tmp_path):
     ("f,E_stor,E_loss\nHz,MPa,MPa\n1,10,1\n", "1 data rows; expected at least 3"),
     ("freq,E1,E2\nHz,MPa,MPa\n1,10,1\n10,11,2\n100,12,3\n", "header rows 'f,E_stor,E_loss'"),
 ])
-def test_material_fit_refuses_a_bad_master_curve_and_writes_nothing(tmp_path, text, says):
+def test_material_fit_refuses_a_bad_master_curve_and_writes_nothing(tmp_path, text, says, slipchain_cli):
     (tmp_path / "bad.csv").write_text(text)
-    proc = _cli("material", "fit", str(tmp_path / "bad.csv"), "--T-ref", "20", "--out", str(tmp_path / "o"))
+    proc = slipchain_cli("material", "fit", str(tmp_path / "bad.csv"), "--T-ref", "20", "--out", str(tmp_path / "o"))
     assert proc.returncode == 2 and proc.stderr.startswith("error: master curve") and says in proc.stderr, proc.stderr
     assert not (tmp_path / "o").exists()
 
@@ -92,12 +86,12 @@ def test_fit_refuses_one_wlf_constant_without_the_other(tmp_path):
         fit_master_curve(master, 20.0, C1=8)
 
 
-def test_material_show_obeys_time_temperature_superposition(tmp_path):
+def test_material_show_obeys_time_temperature_superposition(tmp_path, slipchain_cli):
     """E'(f, T) = E'(f a_T, T_ref), E'' likewise: the WLF shift of every tau_j is a shift of the
     frequency axis (an identity of the Prony formulas; a wrong sign or factor fails it)."""
     import pandas as pd
 
-    proc = _cli("material", "show", "--T", "20", "--T", "11", "--out", str(tmp_path))
+    proc = slipchain_cli("material", "show", "--T", "20", "--T", "11", "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
     t = pd.read_csv(tmp_path / "material.csv")
     D = DEFAULT_COMPOUND
@@ -113,7 +107,7 @@ def test_material_show_obeys_time_temperature_superposition(tmp_path):
     (["--T", "-150"], "option --T has value -150.0; expected a temperature above T_ref - C2"),
     (["--set", "prony_E=[1e8]"], "prony_tau"),
 ])
-def test_material_show_refuses_bad_input_and_writes_nothing(tmp_path, args, says):
-    proc = _cli("material", "show", *args, "--out", str(tmp_path / "o"))
+def test_material_show_refuses_bad_input_and_writes_nothing(tmp_path, args, says, slipchain_cli):
+    proc = slipchain_cli("material", "show", *args, "--out", str(tmp_path / "o"))
     assert proc.returncode == 2 and says in proc.stderr, proc.stderr
     assert not (tmp_path / "o").exists()

@@ -12,11 +12,10 @@ from slipchain.engine.memory import GiB, MemoryEstimateError, available_bytes, c
 from slipchain.model.config import ConfigError
 
 
-def test_cli_refuses_a_run_too_large_for_memory_naming_N_and_writes_nothing(tmp_path):
+def test_cli_refuses_a_run_too_large_for_memory_naming_N_and_writes_nothing(tmp_path, slipchain_cli):
     # Before: killed by the kernel's OOM killer (exit 137, no message) after minutes of swapping.
     out = tmp_path / "big.nc"
-    r = subprocess.run([sys.executable, "-m", "slipchain", "run", "--set", "N=1000000000", "--out", str(out)],
-                       capture_output=True, text=True, timeout=120)
+    r = slipchain_cli("run", "--set", "N=1000000000", "--out", out)
     assert r.returncode == 2, r.stderr
     assert "Traceback" not in r.stderr and r.stderr.startswith("error: N = 1000000000")
     assert "GiB of memory" in r.stderr and "available" in r.stderr

@@ -42,14 +42,14 @@ def _cli(*args):
     return subprocess.run([sys.executable, "-m", "slipchain", *args], capture_output=True, text=True)
 
 
-def test_fig6_3d_from_a_sweep(tmp_path):
+def test_fig6_3d_from_a_sweep(tmp_path, slipchain_cli, store_of_runs):
     (tmp_path / "s.toml").write_text(SWEEP)
     store, out = tmp_path / "store", tmp_path / "fig"
     # one worker: each worker process compiles the kernels anew, and the members are tiny (the
     # sweep on several workers is tests/workflows/test_runner.py's)
     r = _cli("sweep", str(tmp_path / "s.toml"), "--store", str(store), "--workers", "1", "--no-progress")
     assert r.returncode == 0, r.stderr
-    r = _cli("figure", "fig6-3d", "--store", str(store), "--out", str(out))
+    r = slipchain_cli("figure", "fig6-3d", "--store", store, "--out", out)
     assert r.returncode == 0, r.stderr
     table = pd.read_csv(out / "table.csv")
     drops = pd.read_csv(out / "drops.csv")
@@ -70,11 +70,11 @@ def test_fig6_3d_from_a_sweep(tmp_path):
     assert len(saw.merge(table[keys].drop_duplicates(), on=keys)) == len(saw) >= 10
     assert "## The sawtooth per point" in report and saw["swing"].notna().all()
     # a store of one geometry (in its base config, as presets/fig6-3d-eps1.toml) is read as that geometry;
-    # a store without v_d is refused, nothing written
+    # a store without v_d is refused, nothing written (these two stores' runs made here, without Dask)
     (tmp_path / "t.toml").write_text(SWEEP.split("[[grid]]")[0]
                                      + 'geometry = "slab"\nLy = 8\n[[grid]]\ntheta = [0.5, 1.0]\nv_d = [0.05]\nN = [8]\n')
-    _cli("sweep", str(tmp_path / "t.toml"), "--store", str(tmp_path / "s2"), "--workers", "1", "--no-progress")
-    r = _cli("figure", "fig6-3d", "--store", str(tmp_path / "s2"), "--out", str(tmp_path / "one"))
+    store_of_runs(tmp_path / "s2", tmp_path / "t.toml")
+    r = slipchain_cli("figure", "fig6-3d", "--store", tmp_path / "s2", "--out", tmp_path / "one")
     assert r.returncode == 0, r.stderr
     one = pd.read_csv(tmp_path / "one" / "table.csv")
     assert set(one["geometry"]) == {"slab"} and len(one) == 2 and (one["Ly"] == 8).all()
@@ -82,24 +82,24 @@ def test_fig6_3d_from_a_sweep(tmp_path):
     slab = table[(table["geometry"] == "slab") & (table["N"] == 8) & np.isclose(table["v_d"], 0.05)].set_index("theta")["mu"]
     assert mu[1.0] == pytest.approx(slab[1.0], rel=1e-12)  # the same member as in the first store
     (tmp_path / "u.toml").write_text(SWEEP.split("[[grid]]")[0] + "[[grid]]\ntheta = [0.5, 1.0]\nN = [8]\n")
-    _cli("sweep", str(tmp_path / "u.toml"), "--store", str(tmp_path / "s3"), "--workers", "1", "--no-progress")
-    r = _cli("figure", "fig6-3d", "--store", str(tmp_path / "s3"), "--out", str(tmp_path / "nothing"))
+    store_of_runs(tmp_path / "s3", tmp_path / "u.toml")
+    r = slipchain_cli("figure", "fig6-3d", "--store", tmp_path / "s3", "--out", tmp_path / "nothing")
     assert r.returncode == 2 and "v_d" in r.stderr and not (tmp_path / "nothing").exists()
 
 
-def test_slip_maps_of_a_slab_run(tmp_path):
+def test_slip_maps_of_a_slab_run(tmp_path, slipchain_cli):
     run = tmp_path / "run.nc"
-    r = _cli("run", "--set", 'geometry="slab"', "--set", "N=12", "--set", "Ly=10", "--set", "theta=1.0",
+    r = slipchain_cli("run", "--set", 'geometry="slab"', "--set", "N=12", "--set", "Ly=10", "--set", "theta=1.0",
              "--set", 'start="steady"', "--set", "t_total=2e-3", "--out", str(run), "--json")
     assert run.exists(), r.stderr
-    r = _cli("figure", "slip-maps", "--run", str(run), "--out", str(tmp_path / "maps"), "--duration", "4e-3")
+    r = slipchain_cli("figure", "slip-maps", "--run", str(run), "--out", str(tmp_path / "maps"), "--duration", "4e-3")
     assert r.returncode == 0, r.stderr
     ev = pd.read_csv(tmp_path / "maps" / "events.csv")
     assert len(ev) >= 1 and (ev["event_size"] <= 120).all() and (ev["event_moment"] > 0).all()
     assert (tmp_path / "maps" / "slip-maps.png").stat().st_size > 10_000
     # a chain run has no map: exit 2, one message, nothing written
     chain = tmp_path / "chain.nc"
-    r = _cli("run", "--set", "N=12", "--set", "t_total=2e-4", "--out", str(chain), "--json")
+    r = slipchain_cli("run", "--set", "N=12", "--set", "t_total=2e-4", "--out", str(chain), "--json")
     assert json.loads(r.stdout)["N"] == 12  # its report on stdout is JSON, nothing else
-    r = _cli("figure", "slip-maps", "--run", str(chain), "--out", str(tmp_path / "none"))
+    r = slipchain_cli("figure", "slip-maps", "--run", str(chain), "--out", str(tmp_path / "none"))
     assert r.returncode == 2 and "Ly = 1" in r.stderr and not (tmp_path / "none").exists()

@@ -2,7 +2,6 @@
 their errors and, for undecided loads, the range the runs allow; the committed ladder draws."""
 
 import math
-import subprocess
 import sys
 from pathlib import Path
 
@@ -147,7 +146,7 @@ def test_an_evaluations_rung_reads_several_csvs_as_one(tmp_path):
         load_ladder(ladder)
 
 
-def test_a_bad_ladder_file_names_the_rung_key_and_value(tmp_path):
+def test_a_bad_ladder_file_names_the_rung_key_and_value(tmp_path, slipchain_cli):
     bad = tmp_path / "l.toml"
     bad.write_text('[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "guess"\nsource = "x"\n')
     with pytest.raises(ConfigError, match=r"rung 1: config key 'kind' has value 'guess'; expected 'mu-max' or"):
@@ -158,21 +157,18 @@ def test_a_bad_ladder_file_names_the_rung_key_and_value(tmp_path):
     bad.write_text("")
     with pytest.raises(ConfigError, match="at least one"):
         load_ladder(bad)
-    r = subprocess.run([sys.executable, "-m", "slipchain", "figure", "ladder", "--ladder", str(tmp_path / "none.toml"),
-                        "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    r = slipchain_cli("figure", "ladder", "--ladder", tmp_path / "none.toml", "--out", tmp_path / "o")
     assert r.returncode == 2 and "no such file" in r.stderr and not (tmp_path / "o").exists()
 
 
-def test_the_committed_ladder_reads_every_rung_and_draws(tmp_path):
+def test_the_committed_ladder_reads_every_rung_and_draws(tmp_path, slipchain_cli):
     """docs/ladder/ladder.toml: every source it names is committed and read; the figure is written."""
     table = ladder_table(ROOT / "docs" / "ladder" / "ladder.toml")
     assert len(table) == len(load_ladder(ROOT / "docs" / "ladder" / "ladder.toml"))
     first = table.iloc[0]  # the paper's model: mu_star at v_d1 falls by about 20 % (Fig. 6)
     assert first["ratio"] == pytest.approx(0.79, abs=0.02) and first["ratio_se"] < 0.01
     assert all(np.isfinite(r["ratio"]) or r["bounds"] or r["note"] for _, r in table.iterrows())
-    r = subprocess.run([sys.executable, "-m", "slipchain", "figure", "ladder", "--ladder",
-                        str(ROOT / "docs" / "ladder" / "ladder.toml"), "--out", str(tmp_path)], capture_output=True,
-                       text=True)
+    r = slipchain_cli("figure", "ladder", "--ladder", ROOT / "docs" / "ladder" / "ladder.toml", "--out", tmp_path)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "ladder.png").stat().st_size > 10_000 and (tmp_path / "ladder.csv").exists()
     assert pd.read_csv(tmp_path / "ladder.csv")["ratio"].iloc[0] == pytest.approx(first["ratio"])

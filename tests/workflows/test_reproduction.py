@@ -123,7 +123,7 @@ ACCEPTANCE = {
 
 
 @pytest.mark.slow
-def test_small_fig6_sweep_meets_the_papers_claims(tmp_path):
+def test_small_fig6_sweep_meets_the_papers_claims(tmp_path, slipchain_cli):
     """The issue's acceptance on a small real sweep (N = 101, one seed, automatic run length).
 
     At v_d2 every mu_star within 3 % of the dashed line; at v_d1 the drop from theta = 0.1 to 1 is
@@ -149,19 +149,16 @@ def test_small_fig6_sweep_meets_the_papers_claims(tmp_path):
     assert "mu_star versus theta" in text and "f(v_d2, v0)/(epsilon f0) = 0.9731" in text
     assert {p.name for p in figures} == {"fig5.png", "fig5.pdf", "fig6.png", "fig6.pdf"}
     # the CLI draws the same Fig. 6 from the store
-    cli = subprocess.run([sys.executable, "-m", "slipchain", "figure", "fig6", "--store", str(tmp_path / "store"),
-                          "--out", str(tmp_path / "cli")], capture_output=True, text=True, timeout=120)
+    cli = slipchain_cli("figure", "fig6", "--store", tmp_path / "store", "--out", tmp_path / "cli")
     assert cli.returncode == 0, cli.stderr
     assert (tmp_path / "cli" / "fig6.pdf").stat().st_size > 1000
 
 
-def test_reproduce_rejects_an_unknown_preset_and_fig6_needs_a_store(tmp_path):
-    bad = subprocess.run([sys.executable, "-m", "slipchain", "reproduce", "--preset", "huge"], capture_output=True,
-                         text=True, timeout=60)
+def test_reproduce_rejects_an_unknown_preset_and_fig6_needs_a_store(tmp_path, slipchain_cli):
+    bad = slipchain_cli("reproduce", "--preset", "huge")
     words = " ".join(bad.stderr.replace("│", " ").split())  # typer's error box, unwrapped
     assert bad.returncode == 2 and "Invalid value for '--preset'" in words and "'huge' is not one of 'quick', 'paper'" in words
-    none = subprocess.run([sys.executable, "-m", "slipchain", "figure", "fig6", "--store", str(tmp_path / "x"),
-                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=60)
+    none = slipchain_cli("figure", "fig6", "--store", tmp_path / "x", "--out", tmp_path)
     assert none.returncode == 2 and "not a slipchain sweep store" in none.stderr
 
 

@@ -31,21 +31,27 @@ def _cli(*args):
     return subprocess.run([sys.executable, "-m", "slipchain", *args], capture_output=True, text=True)
 
 
-def _sweep(tmp_path, name, material, temperature, v_d="[0.1, 0.05]"):
+def _definition(tmp_path, name, material, temperature, v_d="[0.1, 0.05]"):
     text = BASE.format(material=material, temperature=temperature).replace("[0.1, 0.05]", v_d)
     (tmp_path / f"{name}.toml").write_text(f'name = "{name}"\n' + text)
-    # one worker: each worker process compiles the kernels anew, and the members are tiny (the
-    # sweep on several workers is tests/workflows/test_runner.py's)
-    r = _cli("sweep", str(tmp_path / f"{name}.toml"), "--store", str(tmp_path / name), "--workers", "1", "--no-progress")
+    return tmp_path / f"{name}.toml"
+
+
+def _sweep(tmp_path, name, material, temperature, v_d="[0.1, 0.05]"):
+    """The sweep through the CLI on a Dask local cluster of one worker (each worker process compiles the
+    kernels anew, and the members are tiny; the sweep on several workers is tests/workflows/test_runner.py's)."""
+    toml = _definition(tmp_path, name, material, temperature, v_d)
+    r = _cli("sweep", str(toml), "--store", str(tmp_path / name), "--workers", "1", "--no-progress")
     assert r.returncode == 0, r.stderr
     return tmp_path / name
 
 
-def test_rubber_figure_from_two_sweeps(tmp_path):
+def test_rubber_figure_from_two_sweeps(tmp_path, slipchain_cli, store_of_runs):
     rubber = _sweep(tmp_path, "rubber", 'material = "prony"', "temperature = [20.0, 11.0]\n")
-    elastic = _sweep(tmp_path, "elastic", "", "", v_d="[0.1, 0.05, 0.2]")  # a twin that swept one velocity more
+    # a twin that swept one velocity more (its runs made here, without Dask)
+    elastic = store_of_runs(tmp_path / "elastic", _definition(tmp_path, "elastic", "", "", v_d="[0.1, 0.05, 0.2]")).path
     out = tmp_path / "fig"
-    r = _cli("figure", "rubber", "--store", str(rubber), "--elastic", str(elastic), "--out", str(out))
+    r = slipchain_cli("figure", "rubber", "--store", rubber, "--elastic", elastic, "--out", out)
     assert r.returncode == 0, r.stderr
     assert {p.name for p in out.iterdir()} == {"fig6-rubber.png", "fig6-rubber.pdf", "table.csv", "drops.csv", "report.md"}
     table = pd.read_csv(out / "table.csv")
@@ -64,7 +70,7 @@ def test_rubber_figure_from_two_sweeps(tmp_path):
     report = (out / "report.md").read_text()
     assert "| v_d | eta_c / omega0 | theta | elastic | prony 20 °C | prony 11 °C |" in report
     # stores swapped: the viscoelastic store must hold material = 'prony'
-    r = _cli("figure", "rubber", "--store", str(elastic), "--elastic", str(rubber), "--out", str(tmp_path / "bad"))
+    r = slipchain_cli("figure", "rubber", "--store", elastic, "--elastic", rubber, "--out", tmp_path / "bad")
     assert r.returncode == 2 and "material = 'elastic'; expected 'prony'" in r.stderr
     assert not (tmp_path / "bad").exists()
 

@@ -1,8 +1,6 @@
 """Friction-tester analysis: velocity recovery, runaway detection, uncertainties, bad data, the load test."""
 
 import math
-import subprocess
-import sys
 from dataclasses import replace
 
 import numpy as np
@@ -198,18 +196,14 @@ def test_fit_scale_recovers_a_known_factor():
     assert math.isnan(fit_scale(np.array([1e-9]), np.array([1.0]), (cv, cm)))
 
 
-def test_cli_synth_analyze_and_model_overlay(tmp_path):
-    from slipchain import run
-    from slipchain.sweeps.store import Store
+def test_cli_synth_analyze_and_model_overlay(tmp_path, slipchain_cli, store_of_runs):
     from slipchain.sweeps.definition import make_sweep
 
-    syn = subprocess.run([sys.executable, "-m", "slipchain", "tester", "synth", "--out", str(tmp_path / "syn")],
-                         capture_output=True, text=True, timeout=120)
+    syn = slipchain_cli("tester", "synth", "--out", tmp_path / "syn")
     assert syn.returncode == 0 and "SYNTHETIC DATA" in syn.stderr
     assert "SYNTHETIC DATA" in (tmp_path / "syn" / "README.txt").read_text()
-    ana = subprocess.run([sys.executable, "-m", "slipchain", "tester", "analyze", str(tmp_path / "syn" / "runs.csv"),
-                          "--traces", str(tmp_path / "syn" / "traces.csv"), "--out", str(tmp_path / "ana")],
-                         capture_output=True, text=True, timeout=120)
+    ana = slipchain_cli("tester", "analyze", tmp_path / "syn" / "runs.csv", "--traces", tmp_path / "syn" / "traces.csv",
+                        "--out", tmp_path / "ana")
     assert ana.returncode == 0, ana.stderr
     assert "load claim supported" in ana.stdout
     assert "supported" in (tmp_path / "ana" / "summary.md").read_text()
@@ -217,21 +211,17 @@ def test_cli_synth_analyze_and_model_overlay(tmp_path):
     # a tiny model sweep over v_d (members run here, stored as a sweep would store them)
     sw = make_sweep({"name": "v", "base": {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3},
                      "grid": {"v_d": [1e-5, 1e-4, 1e-3]}})
-    st = Store.open(tmp_path / "store", sw)
-    for m in sw.members:
-        st.write_member(m, run(m.config))
-    fig = subprocess.run([sys.executable, "-m", "slipchain", "figure", "tester", "--runs", str(tmp_path / "ana"),
-                          "--store", str(tmp_path / "store")], capture_output=True, text=True, timeout=120)
+    store_of_runs(tmp_path / "store", sw)
+    fig = slipchain_cli("figure", "tester", "--runs", tmp_path / "ana", "--store", tmp_path / "store")
     assert fig.returncode == 0, fig.stderr
     assert (tmp_path / "ana" / "model_vs_experiment_synthetic-asphalt.png").exists()
 
 
-def test_bytes_that_are_not_utf8_give_one_line_and_exit_2_writing_nothing(tmp_path):
+def test_bytes_that_are_not_utf8_give_one_line_and_exit_2_writing_nothing(tmp_path, slipchain_cli):
     # Before: a UnicodeDecodeError traceback, exit 1.
     bad = tmp_path / "runs.csv"
     bad.write_bytes(b"run_id,surface\nR1,\xff\xfeasphalt\n")
-    proc = subprocess.run([sys.executable, "-m", "slipchain", "tester", "analyze", str(bad), "--out",
-                           str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
+    proc = slipchain_cli("tester", "analyze", bad, "--out", tmp_path / "out")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip() == f"error: {bad}: not UTF-8 text: byte 0xff at byte offset 18 (line 2)"
     assert not (tmp_path / "out").exists()
