@@ -84,7 +84,7 @@ CATALOGUE: dict[str, Study] = {
                             "tester-16 in the slow-loading limit: the weight raised over 1 s and 3 s (the implicit step)"),
     "tester-16-slower": Study("study", 24, "19 of 24 run (700-7 300 s each, 2 at a time; part on 16 CPUs)", "docs/tester-3d/index.md",
                               "tester-16-slow at heavier weights and a 6-s ramp: where the slowly loaded block runs away"),
-    "tester-16-finer": Study("study", 5, "4 of 5 run (1 400-3 700 s each, 2 at a time)", "docs/tester-3d/index.md",
+    "tester-16-finer": Study("study", 5, "all 5 run (1 400-4 700 s each, 1-2 at a time)", "docs/tester-3d/index.md",
                              "tester-16-slower's 6-s ramp at mu_a = 1.00, the midpoint of its bracket"),
     "tester-16-seeds": Study("study", 16, "not run yet (est. 6 h on 2 cores)", "docs/tester-3d/index.md",
                              "tester-16-slower's 6-s bracket, 0.95 and 1.05, for seeds 1 and 2"),
