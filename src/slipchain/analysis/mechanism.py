@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy import ndimage, signal
+from scipy import ndimage
 
 from ..engine.backends import BackendName, Batch, get_backend
 from ..engine.control import RowControl
@@ -248,6 +248,8 @@ def slip_events(field: xr.Dataset, threshold: float = SLIP_THRESHOLD) -> xr.Data
 
 def spectra(field: xr.Dataset, segment: int = WELCH_SEGMENT) -> xr.Dataset:
     """Welch PSDs of the block velocities (mean over blocks), of f_d(t) and of the acoustic proxy."""
+    from scipy import signal  # here: its import (~1 s, scipy.stats with it) was paid by every figure command
+
     fs = 1.0 / float(field.attrs["interval"])
     n = field.sizes["time"]
     nper = min(segment, n)

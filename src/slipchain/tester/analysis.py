@@ -32,7 +32,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from .inputs import Run
 from ..results.velocity import NO_STEADY, OK, RUNAWAY, steady_velocity
@@ -140,6 +139,8 @@ def _band_fit(xi: np.ndarray, p_mpa: np.ndarray, mu: np.ndarray, band: str) -> B
     s2 = float(resid @ resid) / dof
     cov = s2 * np.linalg.pinv(X.T @ X)
     beta, se = float(coef[-1]), float(np.sqrt(cov[-1, -1]))
+    from scipy import stats  # here, not at the top: its import costs ~0.8 s, paid by every figure command before
+
     tq = stats.t.ppf(0.5 + CONFIDENCE / 2, dof)
     p = float(2 * stats.t.sf(abs(beta / se), dof)) if se > 0 else 0.0
     return BandTest(band, n, beta, beta - tq * se, beta + tq * se, p)
