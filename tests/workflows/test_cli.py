@@ -34,7 +34,7 @@ def test_diverged_run_exits_1_and_still_writes(tmp_path, slipchain_cli):
     # drive, a failed physics check (a non-finite state is no longer reachable from the CLI: Config
     # refuses every unstable step, issue 26; tests/physics/test_physics.py forces one)
     proc = slipchain_cli("run", "--set", "N=11", "--set", "theta=0.5", "--set", "integrator=fixed", "--set", "t_total=1e-4",
-                "--out", str(out), "--json")
+                         "--out", str(out), "--json")
     assert proc.returncode == 1
     assert json.loads(proc.stdout)["status"] == "diverged" and "steady mean interface velocity" in proc.stderr
     assert read_dataset(out).attrs["status"] == "diverged"

@@ -90,7 +90,7 @@ def test_fig6_3d_from_a_sweep(tmp_path, slipchain_cli, store_of_runs):
 def test_slip_maps_of_a_slab_run(tmp_path, slipchain_cli):
     run = tmp_path / "run.nc"
     r = slipchain_cli("run", "--set", 'geometry="slab"', "--set", "N=12", "--set", "Ly=10", "--set", "theta=1.0",
-             "--set", 'start="steady"', "--set", "t_total=2e-3", "--out", str(run), "--json")
+                      "--set", 'start="steady"', "--set", "t_total=2e-3", "--out", str(run), "--json")
     assert run.exists(), r.stderr
     r = slipchain_cli("figure", "slip-maps", "--run", str(run), "--out", str(tmp_path / "maps"), "--duration", "4e-3")
     assert r.returncode == 0, r.stderr
