@@ -227,7 +227,7 @@ def test_driver_killed_with_sigkill_loses_only_members_in_flight(tmp_path, cli_s
     assert {mid: (members / f"{mid}.nc").stat().st_mtime_ns for mid in survivors} == mtimes  # not rewritten
 
 
-def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_path, client):
+def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_path, client, slipchain_cli):
     definition = tmp_path / "a.toml"
     definition.write_text('name = "cli"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\ndelta = 0.2\n'
                           "t_total = 3e-3\n[grid]\ntheta = [0.5, 1.0]\n")
@@ -239,20 +239,17 @@ def test_cli_sweep_uses_an_existing_scheduler_and_refuses_a_foreign_store(tmp_pa
     assert re.search(r"ran, completed\s*│\s*2\s*│", first.stdout), first.stdout
     other = tmp_path / "b.toml"
     other.write_text(definition.read_text().replace("[0.5, 1.0]", "[0.5, 0.9]"))
-    refused = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "s"),
-                              "--scheduler", addr, "--no-progress"], capture_output=True, text=True, timeout=120)
+    # the refusals in this process (they happen before a scheduler is asked for anything)
+    refused = slipchain_cli("sweep", other, "--store", tmp_path / "s", "--scheduler", addr, "--no-progress")
     assert refused.returncode == 2
     assert "different sweep definition" in refused.stderr and "theta" in refused.stderr
     assert len(list(Path(tmp_path / "s" / "members").glob("*.nc"))) == 2  # nothing mixed in
     # ... but a new store can take over its finished members: theta = 0.5 is copied, 0.9 computed
-    bad = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "t"),
-                          "--reuse", str(tmp_path / "nowhere"), "--scheduler", addr], capture_output=True, text=True,
-                         timeout=120)
+    bad = slipchain_cli("sweep", other, "--store", tmp_path / "t", "--reuse", tmp_path / "nowhere", "--scheduler", addr)
     assert bad.returncode == 2 and "--reuse" in bad.stderr and "nowhere" in bad.stderr
     assert not (tmp_path / "t").exists()  # refused before anything was written
     for only in ("theta", "theta=0.7"):  # malformed, or not a coordinate: exit 2, nothing written
-        bad = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "t"),
-                              "--only", only, "--scheduler", addr], capture_output=True, text=True, timeout=120)
+        bad = slipchain_cli("sweep", other, "--store", tmp_path / "t", "--only", only, "--scheduler", addr)
         assert bad.returncode == 2 and "--only" in bad.stderr and not (tmp_path / "t").exists(), bad.stderr
     grown = subprocess.run([sys.executable, "-m", "slipchain", "sweep", str(other), "--store", str(tmp_path / "t"),
                             "--reuse", str(tmp_path / "s"), "--scheduler", addr, "--no-progress"],
