@@ -86,7 +86,7 @@ CATALOGUE: dict[str, Study] = {
                               "tester-16-slow at heavier weights and a 6-s ramp: where the slowly loaded block runs away"),
     "tester-16-finer": Study("study", 5, "all 5 run (1 400-4 700 s each, 1-2 at a time)", "docs/tester-3d/index.md",
                              "tester-16-slower's 6-s ramp at mu_a = 1.00, the midpoint of its bracket"),
-    "tester-16-seeds": Study("study", 16, "3 of 16 run (830-1 460 s each on one core; est. 6 h on 2 cores in all)", "docs/tester-3d/index.md",
+    "tester-16-seeds": Study("study", 16, "4 of 16 run (830-2 140 s each on one core; est. 6 h on 2 cores in all)", "docs/tester-3d/index.md",
                              "tester-16-slower's 6-s bracket, 0.95 and 1.05, for seeds 1 and 2"),
     "tester-16-11c": Study("study", 15, "about 420 s on 16 CPUs", "docs/tester-3d/index.md",
                            "tester-16 at Fig. 3's 11 °C (theta 0.2, 0.5, 1; five weights)"),
