@@ -146,23 +146,20 @@ def test_mechanism_cli_on_a_small_store(tmp_path, slipchain_cli):
     assert missing.returncode == 2 and "not a slipchain sweep store" in missing.stderr
 
 
-def _tiny_store(path, grids, base=None):
-    sw = make_sweep({"name": path.name, "base": base or {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2,
-                                                         "t_total": 3e-3}, "grid": grids})
-    st = Store.open(path, sw)
-    for m in sw.members:
-        st.write_member(m, run(m.config))
-    return st
+def _tiny_store(store_of_runs, path, grids, base=None):
+    return store_of_runs(path, make_sweep({"name": path.name, "grid": grids,
+                                           "base": base or {"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2,
+                                                            "t_total": 3e-3}}))
 
 
-def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path, slipchain_cli):
+def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path, slipchain_cli, store_of_runs):
     def figure(*args):
         return slipchain_cli("figure", *args)
 
-    _tiny_store(tmp_path / "vel", {"v_d": [1e-4, 1e-3], "theta": [0.5, 1.0], "seed": [0, 1]})
-    eps_store = _tiny_store(tmp_path / "eps", [{"epsilon": [1e-2], "dt": [2e-8], "theta": [0.5, 1.0], "seed": [0]},
+    _tiny_store(store_of_runs, tmp_path / "vel", {"v_d": [1e-4, 1e-3], "theta": [0.5, 1.0], "seed": [0, 1]})
+    eps_store = _tiny_store(store_of_runs, tmp_path / "eps", [{"epsilon": [1e-2], "dt": [2e-8], "theta": [0.5, 1.0], "seed": [0]},
                                    {"epsilon": [5e-3], "dt": [1e-8], "theta": [0.5, 1.0], "seed": [0]}])
-    _tiny_store(tmp_path / "dw", {"dead_weight": [0.5, 0.9, 1.05], "theta": [1.0]},
+    _tiny_store(store_of_runs, tmp_path / "dw", {"dead_weight": [0.5, 0.9, 1.05], "theta": [1.0]},
                 base={"N": 3, "theta": 1 / 3, "delta": 0.0, "t_total": 4e-3})
     vel = figure("velocity", "--store", str(tmp_path / "vel"), "--out", str(tmp_path / "o"))
     assert vel.returncode == 0, vel.stderr
@@ -171,7 +168,7 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path, slipchai
     assert "epsilon = 0.01:" in eps.stdout and "epsilon = 0.005:" in eps.stdout and "ratio" in eps.stdout
     # issue 12: the figure extended by a store at another base epsilon (rows at v_d = v0 only) and an index CSV
     eps_store.write_index()
-    _tiny_store(tmp_path / "eps2", {"v_d": [0.01, 0.003], "theta": [0.5, 1.0], "seed": [0]},
+    _tiny_store(store_of_runs, tmp_path / "eps2", {"v_d": [0.01, 0.003], "theta": [0.5, 1.0], "seed": [0]},
                 base={"N": 31, "start": "steady", "v0": 0.01, "delta": 0.2, "t_total": 3e-3, "epsilon": 2e-3})
     both = figure("epsilon", "--store", str(tmp_path / "eps2"), "--index", str(tmp_path / "eps" / "index.csv"),
                                 "--out", str(tmp_path / "o2"))
@@ -195,7 +192,7 @@ def test_velocity_epsilon_and_dead_weight_figures_from_stores(tmp_path, slipchai
     assert wrong.returncode == 2 and "needs dead_weight" in wrong.stderr
     # issue 29: grid stores side by side, one panel per value of a config key that one store does not
     # vary (its base value) and the other leaves absent (the weight at once); their rows in evaluations.csv
-    _tiny_store(tmp_path / "dw2", {"dead_weight": [0.5, 1.05], "theta": [1.0, 0.5]},
+    _tiny_store(store_of_runs, tmp_path / "dw2", {"dead_weight": [0.5, 1.05], "theta": [1.0, 0.5]},
                 base={"N": 3, "theta": 1 / 3, "delta": 0.0, "t_total": 4e-3, "dead_weight": 0.5, "t_ramp": 1e-3})
     grid = figure("dead-weight", "--store", str(tmp_path / "dw"), "--store", str(tmp_path / "dw2"),
                                 "--by", "t_ramp", "--out", str(tmp_path / "g"))
