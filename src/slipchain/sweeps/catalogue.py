@@ -88,6 +88,8 @@ CATALOGUE: dict[str, Study] = {
                              "tester-16-slower's 6-s ramp at mu_a = 1.00, the midpoint of its bracket"),
     "tester-16-seeds": Study("study", 16, "4 of 16 run (830-2 140 s each on one core; est. 6 h on 2 cores in all)", "docs/tester-3d/index.md",
                              "tester-16-slower's 6-s bracket, 0.95 and 1.05, for seeds 1 and 2"),
+    "tester-16-11c-slow": Study("study", 8, "running (2026-11-27; est. 1 600-4 700 s per run on one core)", "docs/tester-3d/index.md",
+                                "tester-16-seeds' 6-s bracket, 0.95 and 1.05, at Fig. 3's 11 °C (seed 0)"),
     "tester-16-11c": Study("study", 15, "about 420 s on 16 CPUs", "docs/tester-3d/index.md",
                            "tester-16 at Fig. 3's 11 °C (theta 0.2, 0.5, 1; five weights)"),
     "tester-128": Study("plan", 72, "not run (est. ~700 core-hours: a cluster's job)", "docs/tester-3d/index.md",
