@@ -157,3 +157,9 @@ def test_what_a_cached_loop_calls_is_not_cached_on_its_own():
             for d in _closure_dispatchers(loop.py_func, set()):
                 assert isinstance(d._cache, NullCache) or d.targetoptions.get("inline") == "always", (
                     body, stepper, d.py_func.__qualname__)
+    chunk = compose._fft_chunk("spectral")  # the elastic slab's fixed step, a whole chunk compiled (its FFTs in numba)
+    assert isinstance(chunk._cache, StableFunctionCache)
+    called = list(_closure_dispatchers(chunk.py_func, set()))
+    assert any(d.py_func.__name__ == "step_rows" for d in called)
+    for d in called:
+        assert isinstance(d._cache, NullCache) or d.targetoptions.get("inline") == "always", d.py_func.__qualname__

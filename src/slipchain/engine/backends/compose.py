@@ -58,7 +58,7 @@ from ..scheme import (A_WCONTACT, BODY_ROWS, A_WDAMP, A_WDRIVE, A_WVISC, FASTMAT
                       P_ETAC, P_FOLD, P_KD, P_M, P_SLOW, P_VD)
 from ..jitcache import stable_cache
 from . import implicit, spectral, viscoelastic
-from .pocketfft import fft_module
+from .pocketfft import fft_module, numba_fft
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
 from .base import N_CARRY, Batch, ChunkOutput
@@ -461,14 +461,13 @@ def kernel_driver(sample):
     return advance
 
 
-def rows_driver(stepper, fastmath: bool):
+def rows_driver(stepper, fastmath: bool, cached: bool = True):
     """One step of every live row whose sample is not complete, given the body's outside force ``F``
     of every row (the slab's FFT driver calls it once per FFT); compiled with the stepper's flags
-    (it is inlined here)."""
+    (it is inlined here). ``cached`` False: not cached on its own, for a compiled loop that calls it
+    (:func:`fft_chunk_driver`; :mod:`slipchain.engine.jitcache`)."""
     flags = dict(fastmath=FASTMATH, error_model="numpy") if fastmath else {}
 
-    @stable_cache
-    @nb.njit(cache=True, **flags)
     def step_rows(F, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
                   ctl, aprev, cacc, acc, fd, sample_steps, status, scratch):
         for row in range(x.shape[0]):
@@ -487,7 +486,41 @@ def rows_driver(stepper, fastmath: bool):
             steps[row] += w
             ctl[row, CT_J] += w
 
-    return step_rows
+    return stable_cache(nb.njit(cache=True, **flags)(step_rows)) if cached else nb.njit(**flags)(step_rows)
+
+
+_end_sample_in_loop = nb.njit(spectral.end_sample.py_func)  # spectral.end_sample is cached (called from Python):
+# a compiled loop compiles its own copy
+
+
+def fft_chunk_driver(step_rows):
+    """The slab's and half-space's fixed step (integrators 'fixed' and 'fold') with the elastic body, a whole
+    chunk in one compiled call: :func:`fft_advance`'s loop over samples and steps with its FFTs inside numba
+    (numpy.fft compiled by rocket-fft, the transforms scipy.fft runs, checked bit for bit once per process:
+    :func:`.pocketfft.numba_fft`), then ``step_rows`` (:func:`rows_driver`, its uncached twin). The same
+    arithmetic in the same order as :func:`fft_advance`, so the same bits (``benchmarks/slab_bits.py``),
+    without the per-step Python layer: 2.4x faster per step on 16 x 16, 1.4x on 64 x 64
+    (``benchmarks/bench_fft_chunk.py``, docs/performance.md)."""
+
+    @stable_cache
+    @nb.njit(cache=True)
+    def advance(x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material, ctl,
+                aprev, cacc, acc, fd, sample_steps, status, scratch, neg, k0, dead, out, n_samples, lx, ly):
+        b, n = x.shape
+        for s in range(n_samples):
+            for row in range(b):
+                if status[row] < 0:  # every sample starts afresh (checkpoints resume bit for bit)
+                    start_sample(row, n_contacts, ysolve, params, ctl)
+            for _ in range(sample_steps):
+                src = x - X if dead else x  # dead-weight rows: the body acts on x - X
+                spec = np.fft.rfft2(src.reshape((b, lx, ly)), axes=(1, 2))
+                spec *= neg
+                force = np.fft.irfft2(spec, s=(lx, ly), axes=(1, 2)).reshape((b, n))
+                step_rows(force, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control,
+                          bstate, material, ctl, aprev, cacc, acc, fd, sample_steps, status, scratch)
+            _end_sample_in_loop(x, X, status, steps, fd, out, s, sample_steps, acc)
+
+    return advance
 
 
 def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
@@ -497,6 +530,8 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     module (by default scipy.fft's transforms without its Python layer, :mod:`.pocketfft`). With the
     adaptive step the rows advance in lock-step, one accepted step per FFT (a rejected step is retried
     at once: the positions, hence the elastic force, have not moved)."""
+    compiled = fft is None and batch.twoport is None and batch.material_name == "elastic" and batch.folds is None \
+        and not batch.implicit and numba_fft()
     if fft is None:
         fft = fft_module()
     b, n = batch.x.shape
@@ -508,6 +543,14 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     out, acc, cacc = _chunk_outputs(batch, n_samples)
     fd = np.zeros(b)
     dead = bool(np.any(batch.params[:, P_KD] == 0.0))  # dead-weight rows: the body acts on x - X
+    if compiled:  # the elastic body's fixed step: the whole chunk in one compiled call, the same bits
+        _, folds, control = _stepper_inputs(batch)
+        _fft_chunk(BODIES[batch.geometry])(
+            batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar, batch.n_contacts,
+            batch.ysolve, folds, control, batch.bstate, batch.material, np.zeros((b, N_CT), dtype=np.int64),
+            np.zeros((b, 2 * n)), cacc, acc, fd, sample_steps, batch.status, scratch_arrays(n, cmax), neg, k0, dead,
+            out, n_samples, lx, ly)
+        return ChunkOutput(out, acc, cacc)
     grid = batch.x.reshape(b, lx, ly)  # a view: the FFT reads the state in place
 
     def force():
@@ -838,6 +881,13 @@ def _loop(body: str, adaptive: bool | str):
     else:
         loop = rows_driver(stepper(body, adaptive), fastmath and not adaptive)
     return _recipe(loop, "_loop", (body, adaptive))
+
+
+@functools.cache
+def _fft_chunk(body: str):
+    """The whole-chunk loop of the elastic spectral body's fixed step (:func:`fft_chunk_driver`)."""
+    explicit, commit, fastmath = _body(body)
+    return _recipe(fft_chunk_driver(rows_driver(stepper(body, False), fastmath, cached=False)), "_fft_chunk", (body,))
 
 
 def _recipe(loop, factory: str, args: tuple):

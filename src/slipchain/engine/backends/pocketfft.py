@@ -23,6 +23,7 @@ from __future__ import annotations
 import functools
 import operator
 
+import numba as nb
 import numpy as np
 
 _F64, _C128 = np.dtype(np.float64), np.dtype(np.complex128)
@@ -119,4 +120,39 @@ def fft_module():
         return scipy.fft
 
 
-__all__ = ["DirectFFT", "fft_module"]
+@nb.njit(cache=True)
+def _numba_pair(x, s):
+    """rfft2 over the last two axes of ``x`` (the grids of a batch of rows), and irfft2 of half that spectrum,
+    as :func:`.compose.fft_chunk_driver` calls them, compiled (:func:`numba_fft`; called from Python only, so
+    it may keep numba's cache)."""
+    spec = np.fft.rfft2(x, axes=(1, 2))
+    half = spec * 0.5
+    return spec, np.fft.irfft2(half, s=s, axes=(1, 2))
+
+
+@functools.cache
+def numba_fft() -> bool:
+    """Whether numpy.fft compiles in numba here (rocket-fft, which teaches numba numpy.fft with the
+    pocketfft/DUCC transforms scipy.fft runs) with :func:`fft_module`'s bits on a batch of grids (checked
+    once per process). Where not, the slab's fixed step keeps its Python
+    driver, whose results are the same: only slower."""
+    try:
+        import rocket_fft  # noqa: F401 - registers numpy.fft for numba (also by its numba entry point)
+    except ImportError:
+        return False
+    fft = fft_module()
+    rng = np.random.default_rng(1)
+    try:
+        for shape in ((1, 8, 8), (2, 5, 6), (3, 16, 16)):
+            x = rng.standard_normal(shape)
+            spec, back = _numba_pair(x, shape[1:])
+            ref = fft.rfft2(x, axes=(1, 2))
+            if not (spec.tobytes() == ref.tobytes()
+                    and back.tobytes() == fft.irfft2(ref * 0.5, s=shape[1:], axes=(1, 2)).tobytes()):
+                return False
+    except Exception:  # noqa: BLE001 - a rocket-fft that does not compile these calls: the Python driver
+        return False
+    return True
+
+
+__all__ = ["DirectFFT", "fft_module", "numba_fft"]
