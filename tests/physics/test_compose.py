@@ -137,3 +137,40 @@ def test_the_slab_fixed_step_compiled_whole_gives_the_python_drivers_bits():
         for name in ("out", "acc", "cacc"):
             assert np.array_equal(getattr(compiled, name), getattr(python, name)), (cfg, name)
         assert np.abs(one.x - batch.x).max() > 0  # it moved
+
+
+def test_the_implicit_steppers_explicit_steps_compiled_give_the_python_drivers_bits():
+    """The implicit stepper's explicit steps on the slab, half-space and chain2d run compiled between its
+    backward-Euler tries (compose.krylov_explicit_driver: the body's force by numpy.fft and np.dot in numba,
+    then the rows' adaptive step). Against the same driver given its FFT module (which keeps them in Python):
+    the same state, outputs and carried controller, bit for bit, for the elastic slab under either drive,
+    the rubber slab under the dead weight (the tester's body), the half-space and chain2d."""
+    import copy
+
+    from slipchain.engine.backends import Batch
+    from slipchain.engine.backends.pocketfft import fft_module
+    from slipchain.model.config import make_config
+    from slipchain.model.system import build_system, initial_state
+
+    assert compose.numba_dot()
+    base = dict(N=8, Ly=8, theta=1.0, seed=0, epsilon=1.0, eta_c=1e5, v_d=1e-3, integrator="implicit", dt=1e-7,
+                output_interval=1e-3, t_total=4e-3)
+    cases = (dict(base, geometry="slab", start="steady"),
+             dict(base, geometry="slab", dead_weight=0.4, start="rest"),
+             dict(base, geometry="slab", N_L=5, material="prony", dead_weight=0.3, start="rest"),
+             dict(base, geometry="halfspace", start="steady"),
+             dict(base, geometry="chain2d", start="steady"))
+    for cfg in cases:
+        config = make_config(**cfg)
+        system = build_system(config)
+        batch = Batch.pack([system], [initial_state(system)])
+        one, two = copy.deepcopy(batch), copy.deepcopy(batch)
+        body = compose.BODIES[batch.geometry] + ("-prony" if batch.material_name == "prony" else "")
+        compiled = compose.krylov_implicit_advance(one, 4, config.sample_steps)
+        assert compose._krylov_explicit(body).signatures, cfg  # the compiled path ran
+        python = compose.krylov_implicit_advance(two, 4, config.sample_steps, fft=fft_module())
+        for name in ("x", "u", "X", "U", "ysolve", "step", "status", "bstate", "carry", "step_control"):
+            assert np.array_equal(getattr(one, name), getattr(two, name)), (cfg, name)
+        for name in ("out", "acc", "cacc"):
+            assert np.array_equal(getattr(compiled, name), getattr(python, name)), (cfg, name)
+        assert one.step_control[0, 2] > 0 and np.abs(one.x - batch.x).max() > 0  # explicit steps taken; it moved

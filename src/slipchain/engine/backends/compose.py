@@ -649,6 +649,84 @@ class _TopDriver:
         self.acc[:, A_WVISC] += self.wtop
 
 
+def krylov_explicit_driver(step_rows):
+    """The implicit stepper's explicit steps on one row of a slab, half-space or chain2d batch between two
+    backward-Euler tries, compiled: :func:`krylov_implicit_advance`'s loop while :func:`implicit_plan` says
+    explicit, the body's force from outside its kernel computed as its ``explicit_force`` does (the slab's
+    -L (x - d) by numpy.fft in numba, rocket-fft; with the rubber under the dead weight the arms' -L_c g too,
+    g = r . xi by np.dot, kept in work row 2J + 2; chain2d none), then ``step_rows`` (:func:`rows_driver`'s
+    uncached twin of the geometry's adaptive step). The same arithmetic in the same order, so the same bits
+    (checked once per process: :func:`.pocketfft.numba_fft`, :func:`numba_dot`). Returns (True, level, base
+    steps) of the plan's next backward-Euler try, or (False, 0, 0) at the sample's end. Not for the rubber
+    under the drive springs (its arms act through L less its mean, numpy's pairwise mean) nor the top."""
+
+    @stable_cache
+    @nb.njit(cache=True)
+    def explicit_steps(k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate, material,
+                       ctl, aprev, cacc, acc, fd, sample_steps, status, scratch, kern, lx, ly, spectral_body, prony, dead):
+        cr, ctrl = ctl[0], control[0]
+        n = x.shape[1]
+        J = material.shape[2]
+        nc, ys = n_contacts[0], ysolve[0]
+        pair = np.empty((2, n))
+        force = np.zeros((1, n if spectral_body else 0))
+        while cr[CT_J] < sample_steps:
+            what, lv, w = implicit_plan(cr, ctrl, cr[CT_J], sample_steps)
+            if what == PLAN_IMPLICIT:
+                return True, lv, w
+            was = cr[CT_LEVEL]
+            if what == PLAN_TAIL:
+                cr[CT_LEVEL] = int(ctrl[1])
+            if spectral_body and prony:  # SpectralOperator.apply_both of (x - X, g), SlabSystem.arm_part (dead: L_c g)
+                pair[0] = x[0] - X[0]
+                pair[1] = np.dot(material[0, 0], bstate[0, :J])
+                both = np.fft.irfft2(kern * np.fft.rfft2(pair.reshape((2, lx, ly)), axes=(1, 2)), s=(lx, ly),
+                                     axes=(1, 2)).reshape((2, n))
+                for i in range(n):
+                    bstate[0, 2 * J + 2, i] = -both[1, i]
+                    force[0, i] = -(both[0, i] + both[1, i])
+            elif spectral_body:  # SpectralOperator.apply
+                v = x[0] - X[0] if dead else x[0].copy()
+                lvec = np.fft.irfft2(kern * np.fft.rfft2(v.reshape((lx, ly))), s=(lx, ly)).reshape(n)
+                for i in range(n):
+                    force[0, i] = -lvec[i]
+            step_rows(force, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control, bstate,
+                      material, ctl, aprev, cacc, acc, fd, sample_steps, status, scratch)
+            if what == PLAN_TAIL:
+                cr[CT_LEVEL] = lv
+            else:
+                after_explicit(cr, ctrl, was, nc, ys)
+        return False, 0, 0
+
+    return explicit_steps
+
+
+@nb.njit(cache=True)
+def _dot(r, br):
+    """np.dot of a row's Prony weights and its arms' fields, compiled (:func:`numba_dot`; called from Python only)."""
+    return np.dot(r, br)
+
+
+@functools.cache
+def numba_dot() -> bool:
+    """Whether np.dot compiled by numba gives numpy's bits for the arms' sums g = r . xi (both call a BLAS
+    gemv; checked once per process on a few sizes): else the Krylov driver's explicit steps stay in Python."""
+    rng = np.random.default_rng(2)
+    for J in (1, 3, 7, 12, 20):
+        for n in (16, 64, 256):
+            r, br = rng.random(J), rng.standard_normal((J, n))
+            if _dot(r, br).tobytes() != np.dot(r, br).tobytes():
+                return False
+    return True
+
+
+@functools.cache
+def _krylov_explicit(body: str):
+    """The compiled explicit steps of the implicit stepper's Krylov driver with this body (:func:`krylov_explicit_driver`)."""
+    return _recipe(krylov_explicit_driver(rows_driver(stepper(body, True), False, cached=False)), "_krylov_explicit",
+                   (body,))
+
+
 def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
     """integrator = 'implicit' on the slab, half-space and chain2d (issue 27; either drive, material
     'elastic'): row after row, each step as the implicit stepper's controller says
@@ -658,6 +736,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
     preconditioned conjugate gradients; :class:`.implicit.SlabSystem`, :class:`.implicit.LatticeSystem`),
     judged by :func:`implicit_verdict`. The level, error memory and back-off go on across samples
     (``Batch.carry``, as the chain's)."""
+    default_fft = fft is None
     if fft is None:
         fft = fft_module()
     b, n = batch.x.shape
@@ -682,10 +761,16 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
         commit = spectral.body_commit if spectral_body else lattice_commit
     no_force = np.zeros((1, 0))
     carry = batch.carry
+    # the explicit steps compiled (the same bits; Python where numba's FFT or dot differ or the body needs the Python)
+    compiled = default_fft and top is None and (not spectral_body or numba_fft()) and (not prony or numba_dot())
+    explicit_steps = _krylov_explicit(BODIES[batch.geometry] + ("-prony" if prony else "")) if compiled else None
+    lx, ly = batch.shape
     for row in np.flatnonzero(batch.status < 0):
         r = slice(row, row + 1)
         p = batch.params[row]
         dead = p[P_KD] == 0.0  # the dead weight: the slab's body acts on x - X (the plate's displacement in every entry)
+        fast = explicit_steps is not None and (dead or not (prony and spectral_body))
+        kern_row = batch.kernel[row] if spectral_body else no_force
         arms = implicit.Arms(batch.material[row], batch.bstate[row]) if prony else None
         if top is not None:
             system = implicit.TopSlabSystem(p, arms, top, row, batch.preconditioner)
@@ -724,7 +809,14 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
             spent = 0.0  # the tries' cost since the last accepted implicit step (KRYLOV_TRY_UNITS), per sample
             waits = 0  # the cost rule's back-off within this sample (not reset by the climb's accepted steps)
             while cr[CT_J] < sample_steps:
-                what, lv, w = implicit_plan(cr, ctrl, cr[CT_J], sample_steps)
+                if fast:  # the explicit steps up to the next try, compiled
+                    more, lv, w = explicit_steps(*rows, sample_steps, batch.status[r], scratch, kern_row, lx, ly,
+                                                 spectral_body, prony, dead)
+                    if not more:
+                        break
+                    what = PLAN_IMPLICIT
+                else:
+                    what, lv, w = implicit_plan(cr, ctrl, cr[CT_J], sample_steps)
                 if what != PLAN_IMPLICIT:
                     was = cr[CT_LEVEL]
                     if what == PLAN_TAIL:

@@ -130,12 +130,20 @@ def _numba_pair(x, s):
     return spec, np.fft.irfft2(half, s=s, axes=(1, 2))
 
 
+@nb.njit(cache=True)
+def _numba_pair_2d(x, s):
+    """The same on one grid (the implicit stepper's SpectralOperator.apply: rfft2 over the default axes)."""
+    spec = np.fft.rfft2(x)
+    return spec, np.fft.irfft2(spec * 0.5, s=s)
+
+
 @functools.cache
 def numba_fft() -> bool:
     """Whether numpy.fft compiles in numba here (rocket-fft, which teaches numba numpy.fft with the
-    pocketfft/DUCC transforms scipy.fft runs) with :func:`fft_module`'s bits on a batch of grids (checked
-    once per process). Where not, the slab's fixed step keeps its Python
-    driver, whose results are the same: only slower."""
+    pocketfft/DUCC transforms scipy.fft runs) with :func:`fft_module`'s bits on batches of grids and on
+    single grids (checked once per process). Where not, the slab's drivers keep their per-step Python
+    (:func:`.compose.fft_advance`, :func:`.compose.krylov_implicit_advance`), whose results are the same:
+    only slower."""
     try:
         import rocket_fft  # noqa: F401 - registers numpy.fft for numba (also by its numba entry point)
     except ImportError:
@@ -149,6 +157,12 @@ def numba_fft() -> bool:
             ref = fft.rfft2(x, axes=(1, 2))
             if not (spec.tobytes() == ref.tobytes()
                     and back.tobytes() == fft.irfft2(ref * 0.5, s=shape[1:], axes=(1, 2)).tobytes()):
+                return False
+        for shape in ((8, 8), (5, 6), (16, 16)):
+            x = rng.standard_normal(shape)
+            spec, back = _numba_pair_2d(x, shape)
+            ref = fft.rfft2(x)
+            if not (spec.tobytes() == ref.tobytes() and back.tobytes() == fft.irfft2(ref * 0.5, s=shape).tobytes()):
                 return False
     except Exception:  # noqa: BLE001 - a rocket-fft that does not compile these calls: the Python driver
         return False
