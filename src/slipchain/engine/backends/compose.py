@@ -31,7 +31,10 @@ stepper, contact solver and drive):
 * **Driver**: the loop over rows, samples and steps. :func:`kernel_driver` runs a whole chunk of a
   row in one compiled call (the chains: the body needs nothing from outside); the slab's body needs
   one FFT of every row per step, so its driver (:func:`fft_advance`) alternates the FFT with
-  :func:`rows_driver`, one step of every live row.
+  :func:`rows_driver`, one step of every live row; with the elastic body's fixed step the whole chunk is
+  one compiled call with its FFTs inside (:func:`fft_chunk_driver`, numpy.fft compiled by rocket-fft), and
+  the implicit stepper's explicit steps between two tries are one compiled call per row
+  (:func:`krylov_explicit_driver`).
 
 :func:`loop` gives the compiled loop of a (geometry, integrator) combination, composed on first use
 (numba caches each on disk: a closure over compiled pieces is cached like a function; the pieces it
