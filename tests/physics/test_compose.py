@@ -105,12 +105,13 @@ def test_every_geometry_has_one_body_and_one_loop_per_stepper():
     assert compose.loop("chain", True) is not compose.loop("chain", False)
 
 
-def test_the_slab_fixed_step_compiled_whole_gives_the_python_drivers_bits():
-    """The elastic slab's and half-space's fixed step ('fixed', 'fold') runs a whole chunk in one compiled call,
+def test_the_slab_explicit_steps_compiled_whole_give_the_python_drivers_bits():
+    """The elastic slab's and half-space's fixed step ('fixed', 'fold') and adaptive step run a whole chunk in one compiled call,
     its FFTs in numba (compose.fft_chunk_driver; rocket-fft, a dependency, so the compiled path is taken here).
     It does fft_advance's arithmetic in fft_advance's order: the state and the chunk's outputs equal those
     of the Python driver (the same function given its FFT module, which keeps the per-step Python loop) bit
-    for bit, under the spring drive, the dead weight (the body on x - X) and for the half-space."""
+    for bit, under the spring drive, the dead weight (the body on x - X) and for the half-space; the adaptive
+    step (the rows in lock-step) on a batch of two rows."""
     import copy
 
     from slipchain.engine.backends import Batch
@@ -122,11 +123,12 @@ def test_the_slab_fixed_step_compiled_whole_gives_the_python_drivers_bits():
     base = dict(N=8, Ly=6, theta=0.5, seed=2, output_interval=1e-4, t_total=1e-3)
     for cfg in (dict(base, geometry="slab", integrator="fold", dt=5e-8, start="steady"),
                 dict(base, geometry="slab", integrator="fixed", dt=2e-8, dead_weight=0.5, start="rest"),
-                dict(base, geometry="halfspace", integrator="fixed", dt=2e-8, start="steady")):
-        config = make_config(**cfg)
-        system = build_system(config)
-        batch = Batch.pack([system], [initial_state(system)])
-        chunk = compose._fft_chunk(compose.BODIES[batch.geometry])
+                dict(base, geometry="halfspace", integrator="fixed", dt=2e-8, start="steady"),
+                dict(base, geometry="slab", integrator="adaptive", dt=2e-8, start="steady", theta=(0.5, 1.0))):
+        configs = [make_config(**dict(cfg, theta=t)) for t in np.atleast_1d(cfg["theta"])]
+        config, systems = configs[0], [build_system(c) for c in configs]
+        batch = Batch.pack(systems, [initial_state(s) for s in systems])
+        chunk = compose._fft_chunk(compose.BODIES[batch.geometry], cfg["integrator"] == "adaptive")
         before = len(chunk.signatures)
         one, two = copy.deepcopy(batch), copy.deepcopy(batch)
         compiled = compose.fft_advance(one, 5, config.sample_steps)

@@ -46,7 +46,7 @@ for name in sys.argv[1:]:
     before = len(children)
     ds = run(make_config(**kw, start="steady", t_total=2e-4, output_interval=1e-5, seed=1), progress=False)
     # the slab's fixed step runs its whole chunk compiled (compose.fft_chunk_driver), the others the composed loop
-    disp = compose._fft_chunk("spectral") if loop == ("slab", False) else compose.loop(*loop)
+    disp = compose._fft_chunk("spectral", False) if loop == ("slab", False) else compose.loop(*loop)
     sig = disp.signatures[0]
     out[name] = dict(hits=sum(disp.stats.cache_hits.values()), misses=sum(disp.stats.cache_misses.values()),
                      children=len(children) - before,
@@ -159,7 +159,7 @@ def test_what_a_cached_loop_calls_is_not_cached_on_its_own():
                 assert isinstance(d._cache, NullCache) or d.targetoptions.get("inline") == "always", (
                     body, stepper, d.py_func.__qualname__)
     # the elastic slab's fixed step, a whole chunk compiled (its FFTs in numba); the implicit stepper's explicit steps
-    chunks = [compose._fft_chunk("spectral")] + [compose._krylov_explicit(b) for b in ("spectral", "spectral-prony",
+    chunks = [compose._fft_chunk("spectral", a) for a in (False, True)] + [compose._krylov_explicit(b) for b in ("spectral", "spectral-prony",
                                                                                      "lattice", "lattice-prony")]
     for chunk in chunks:
         assert isinstance(chunk._cache, StableFunctionCache)

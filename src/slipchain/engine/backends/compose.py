@@ -31,7 +31,7 @@ stepper, contact solver and drive):
 * **Driver**: the loop over rows, samples and steps. :func:`kernel_driver` runs a whole chunk of a
   row in one compiled call (the chains: the body needs nothing from outside); the slab's body needs
   one FFT of every row per step, so its driver (:func:`fft_advance`) alternates the FFT with
-  :func:`rows_driver`, one step of every live row; with the elastic body's fixed step the whole chunk is
+  :func:`rows_driver`, one step of every live row; with the elastic body's explicit steppers the whole chunk is
   one compiled call with its FFTs inside (:func:`fft_chunk_driver`, numpy.fft compiled by rocket-fft), and
   the implicit stepper's explicit steps between two tries are one compiled call per row
   (:func:`krylov_explicit_driver`).
@@ -496,9 +496,10 @@ _end_sample_in_loop = nb.njit(spectral.end_sample.py_func)  # spectral.end_sampl
 # a compiled loop compiles its own copy
 
 
-def fft_chunk_driver(step_rows):
-    """The slab's and half-space's fixed step (integrators 'fixed' and 'fold') with the elastic body, a whole
-    chunk in one compiled call: :func:`fft_advance`'s loop over samples and steps with its FFTs inside numba
+def fft_chunk_driver(step_rows, adaptive: bool):
+    """The slab's and half-space's explicit steppers (the fixed step, integrators 'fixed' and 'fold', or the
+    adaptive step, ``adaptive``: the rows in lock-step, one accepted step per FFT) with the elastic body, a
+    whole chunk in one compiled call: :func:`fft_advance`'s loop over samples and steps with its FFTs inside numba
     (numpy.fft compiled by rocket-fft, the transforms scipy.fft runs, checked bit for bit once per process:
     :func:`.pocketfft.numba_fft`), then ``step_rows`` (:func:`rows_driver`, its uncached twin). The same
     arithmetic in the same order as :func:`fft_advance`, so the same bits (``benchmarks/slab_bits.py``),
@@ -515,6 +516,13 @@ def fft_chunk_driver(step_rows):
                 if status[row] < 0:  # every sample starts afresh (checkpoints resume bit for bit)
                     start_sample(row, n_contacts, ysolve, params, ctl)
             for _ in range(sample_steps):
+                if adaptive:  # every accepted step takes at least one base step: until every live row's sample is done
+                    more = False
+                    for row in range(b):
+                        if status[row] < 0 and ctl[row, CT_J] < sample_steps:
+                            more = True
+                    if not more:
+                        break
                 src = x - X if dead else x  # dead-weight rows: the body acts on x - X
                 spec = np.fft.rfft2(src.reshape((b, lx, ly)), axes=(1, 2))
                 spec *= neg
@@ -533,8 +541,8 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     module (by default scipy.fft's transforms without its Python layer, :mod:`.pocketfft`). With the
     adaptive step the rows advance in lock-step, one accepted step per FFT (a rejected step is retried
     at once: the positions, hence the elastic force, have not moved)."""
-    compiled = fft is None and batch.twoport is None and batch.material_name == "elastic" and batch.folds is None \
-        and not batch.implicit and numba_fft()
+    compiled = fft is None and batch.twoport is None and batch.material_name == "elastic" and not batch.implicit \
+        and numba_fft()
     if fft is None:
         fft = fft_module()
     b, n = batch.x.shape
@@ -546,9 +554,9 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     out, acc, cacc = _chunk_outputs(batch, n_samples)
     fd = np.zeros(b)
     dead = bool(np.any(batch.params[:, P_KD] == 0.0))  # dead-weight rows: the body acts on x - X
-    if compiled:  # the elastic body's fixed step: the whole chunk in one compiled call, the same bits
-        _, folds, control = _stepper_inputs(batch)
-        _fft_chunk(BODIES[batch.geometry])(
+    if compiled:  # the elastic body's explicit steppers: the whole chunk in one compiled call, the same bits
+        adaptive, folds, control = _stepper_inputs(batch)
+        _fft_chunk(BODIES[batch.geometry], adaptive)(
             batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar, batch.n_contacts,
             batch.ysolve, folds, control, batch.bstate, batch.material, np.zeros((b, N_CT), dtype=np.int64),
             np.zeros((b, 2 * n)), cacc, acc, fd, sample_steps, batch.status, scratch_arrays(n, cmax), neg, k0, dead,
@@ -979,10 +987,12 @@ def _loop(body: str, adaptive: bool | str):
 
 
 @functools.cache
-def _fft_chunk(body: str):
-    """The whole-chunk loop of the elastic spectral body's fixed step (:func:`fft_chunk_driver`)."""
+def _fft_chunk(body: str, adaptive: bool = False):
+    """The whole-chunk loop of the elastic spectral body's fixed or adaptive step (:func:`fft_chunk_driver`;
+    the step's flags as :func:`_loop`'s)."""
     explicit, commit, fastmath = _body(body)
-    return _recipe(fft_chunk_driver(rows_driver(stepper(body, False), fastmath, cached=False)), "_fft_chunk", (body,))
+    return _recipe(fft_chunk_driver(rows_driver(stepper(body, adaptive), fastmath and not adaptive, cached=False), adaptive),
+                   "_fft_chunk", (body, adaptive))
 
 
 def _recipe(loop, factory: str, args: tuple):
