@@ -111,7 +111,8 @@ def test_the_slab_explicit_steps_compiled_whole_give_the_python_drivers_bits():
     It does fft_advance's arithmetic in fft_advance's order: the state and the chunk's outputs equal those
     of the Python driver (the same function given its FFT module, which keeps the per-step Python loop) bit
     for bit, under the spring drive, the dead weight (the body on x - X) and for the half-space; the adaptive
-    step (the rows in lock-step) on a batch of two rows."""
+    step (the rows in lock-step) on a batch of two rows; the rubber's fold step (its arms' field in the same
+    batched FFT) under the dead weight and on the half-space."""
     import copy
 
     from slipchain.engine.backends import Batch
@@ -119,22 +120,27 @@ def test_the_slab_explicit_steps_compiled_whole_give_the_python_drivers_bits():
     from slipchain.model.config import make_config
     from slipchain.model.system import build_system, initial_state
 
-    assert numba_fft()
+    assert numba_fft() and compose.numba_einsum()
     base = dict(N=8, Ly=6, theta=0.5, seed=2, output_interval=1e-4, t_total=1e-3)
     for cfg in (dict(base, geometry="slab", integrator="fold", dt=5e-8, start="steady"),
                 dict(base, geometry="slab", integrator="fixed", dt=2e-8, dead_weight=0.5, start="rest"),
                 dict(base, geometry="halfspace", integrator="fixed", dt=2e-8, start="steady"),
-                dict(base, geometry="slab", integrator="adaptive", dt=2e-8, start="steady", theta=(0.5, 1.0))):
+                dict(base, geometry="slab", integrator="adaptive", dt=2e-8, start="steady", theta=(0.5, 1.0)),
+                dict(base, geometry="slab", N_L=5, material="prony", integrator="fold", dt=1e-7, epsilon=1.0, eta_c=1e5,
+                     dead_weight=0.3, start="rest"),
+                dict(base, geometry="halfspace", material="prony", integrator="fold", dt=1e-7, epsilon=1.0, eta_c=1e5,
+                     start="steady")):
         configs = [make_config(**dict(cfg, theta=t)) for t in np.atleast_1d(cfg["theta"])]
         config, systems = configs[0], [build_system(c) for c in configs]
         batch = Batch.pack(systems, [initial_state(s) for s in systems])
-        chunk = compose._fft_chunk(compose.BODIES[batch.geometry], cfg["integrator"] == "adaptive")
+        body = compose.BODIES[batch.geometry] + ("-prony" if batch.material_name == "prony" else "")
+        chunk = compose._fft_chunk(body, cfg["integrator"] == "adaptive")
         before = len(chunk.signatures)
         one, two = copy.deepcopy(batch), copy.deepcopy(batch)
         compiled = compose.fft_advance(one, 5, config.sample_steps)
         assert len(chunk.signatures) >= max(before, 1)  # the compiled path ran
         python = compose.fft_advance(two, 5, config.sample_steps, fft=fft_module())
-        for name in ("x", "u", "X", "U", "ysolve", "step", "status"):
+        for name in ("x", "u", "X", "U", "ysolve", "step", "status", "bstate"):
             assert np.array_equal(getattr(one, name), getattr(two, name)), (cfg, name)
         for name in ("out", "acc", "cacc"):
             assert np.array_equal(getattr(compiled, name), getattr(python, name)), (cfg, name)

@@ -496,9 +496,11 @@ _end_sample_in_loop = nb.njit(spectral.end_sample.py_func)  # spectral.end_sampl
 # a compiled loop compiles its own copy
 
 
-def fft_chunk_driver(step_rows, adaptive: bool):
+def fft_chunk_driver(step_rows, adaptive: bool, prony: bool = False):
     """The slab's and half-space's explicit steppers (the fixed step, integrators 'fixed' and 'fold', or the
-    adaptive step, ``adaptive``: the rows in lock-step, one accepted step per FFT) with the elastic body, a
+    adaptive step, ``adaptive``: the rows in lock-step, one accepted step per FFT) with the elastic body or
+    (``prony``) the rubber's without a top of its own (the arms' field g = sum_j r_j xi_j by the loop numpy's
+    einsum makes, checked once per process: :func:`numba_einsum`; its L_c g kept in work row 2J + 2), a
     whole chunk in one compiled call: :func:`fft_advance`'s loop over samples and steps with its FFTs inside numba
     (numpy.fft compiled by rocket-fft, the transforms scipy.fft runs, checked bit for bit once per process:
     :func:`.pocketfft.numba_fft`), then ``step_rows`` (:func:`rows_driver`, its uncached twin). The same
@@ -523,10 +525,28 @@ def fft_chunk_driver(step_rows, adaptive: bool):
                             more = True
                     if not more:
                         break
-                src = x - X if dead else x  # dead-weight rows: the body acts on x - X
-                spec = np.fft.rfft2(src.reshape((b, lx, ly)), axes=(1, 2))
-                spec *= neg
-                force = np.fft.irfft2(spec, s=(lx, ly), axes=(1, 2)).reshape((b, n))
+                if prony:  # fft_advance's viscoelastic force: L (x - X) and the arms' L_c g in one batched pair
+                    J = material.shape[2]
+                    pair = np.zeros((2 * b, n))
+                    for row in range(b):
+                        for i in range(n):
+                            pair[row, i] = x[row, i] - X[row, i]
+                        for j in range(J):
+                            for i in range(n):
+                                pair[b + row, i] += material[row, 0, j] * bstate[row, j, i]
+                    spec = np.fft.rfft2(pair.reshape((2 * b, lx, ly)), axes=(1, 2))
+                    spec *= neg
+                    both = np.fft.irfft2(spec, s=(lx, ly), axes=(1, 2)).reshape((2 * b, n))
+                    force = np.empty((b, n))
+                    for row in range(b):
+                        for i in range(n):
+                            bstate[row, 2 * J + 2, i] = both[b + row, i]
+                            force[row, i] = both[row, i] + both[b + row, i]
+                else:
+                    src = x - X if dead else x  # dead-weight rows: the body acts on x - X
+                    spec = np.fft.rfft2(src.reshape((b, lx, ly)), axes=(1, 2))
+                    spec *= neg
+                    force = np.fft.irfft2(spec, s=(lx, ly), axes=(1, 2)).reshape((b, n))
                 step_rows(force, k0, x, u, X, U, steps, params, sites, vstar, n_contacts, ysolve, folds, control,
                           bstate, material, ctl, aprev, cacc, acc, fd, sample_steps, status, scratch)
             _end_sample_in_loop(x, X, status, steps, fd, out, s, sample_steps, acc)
@@ -541,8 +561,8 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     module (by default scipy.fft's transforms without its Python layer, :mod:`.pocketfft`). With the
     adaptive step the rows advance in lock-step, one accepted step per FFT (a rejected step is retried
     at once: the positions, hence the elastic force, have not moved)."""
-    compiled = fft is None and batch.twoport is None and batch.material_name == "elastic" and not batch.implicit \
-        and numba_fft()
+    prony = batch.material_name == "prony"
+    compiled = fft is None and batch.twoport is None and not batch.implicit and numba_fft() and (not prony or numba_einsum())
     if fft is None:
         fft = fft_module()
     b, n = batch.x.shape
@@ -554,9 +574,11 @@ def fft_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> Ch
     out, acc, cacc = _chunk_outputs(batch, n_samples)
     fd = np.zeros(b)
     dead = bool(np.any(batch.params[:, P_KD] == 0.0))  # dead-weight rows: the body acts on x - X
-    if compiled:  # the elastic body's explicit steppers: the whole chunk in one compiled call, the same bits
+    if compiled:  # the explicit steppers: the whole chunk in one compiled call, the same bits
         adaptive, folds, control = _stepper_inputs(batch)
-        _fft_chunk(BODIES[batch.geometry], adaptive)(
+        if prony:  # (the half-space's arms act through L less its uniform mode: arm_kernel)
+            neg = np.concatenate([neg, arm_kernel(neg, batch.params[:, P_KD] == 0.0)])
+        _fft_chunk(BODIES[batch.geometry] + ("-prony" if prony else ""), adaptive)(
             batch.x, batch.u, batch.X, batch.U, batch.step, batch.params, batch.sites, batch.vstar, batch.n_contacts,
             batch.ysolve, folds, control, batch.bstate, batch.material, np.zeros((b, N_CT), dtype=np.int64),
             np.zeros((b, 2 * n)), cacc, acc, fd, sample_steps, batch.status, scratch_arrays(n, cmax), neg, k0, dead,
@@ -991,8 +1013,34 @@ def _fft_chunk(body: str, adaptive: bool = False):
     """The whole-chunk loop of the elastic spectral body's fixed or adaptive step (:func:`fft_chunk_driver`;
     the step's flags as :func:`_loop`'s)."""
     explicit, commit, fastmath = _body(body)
-    return _recipe(fft_chunk_driver(rows_driver(stepper(body, adaptive), fastmath and not adaptive, cached=False), adaptive),
-                   "_fft_chunk", (body, adaptive))
+    step_rows = rows_driver(stepper(body, adaptive), fastmath and not adaptive, cached=False)
+    return _recipe(fft_chunk_driver(step_rows, adaptive, body == "spectral-prony"), "_fft_chunk", (body, adaptive))
+
+
+@nb.njit(cache=True)
+def _arm_sums(r, xi):
+    """g = sum_j r_j xi_j of each row, as :func:`fft_chunk_driver` sums it (:func:`numba_einsum`; called from
+    Python only)."""
+    b, J, n = xi.shape
+    g = np.zeros((b, n))
+    for row in range(b):
+        for j in range(J):
+            for i in range(n):
+                g[row, i] += r[row, j] * xi[row, j, i]
+    return g
+
+
+@functools.cache
+def numba_einsum() -> bool:
+    """Whether the compiled arms' sums give numpy's ``einsum("bj,bjn->bn")`` bits (:func:`fft_advance`'s; checked once
+    per process on a few sizes): else the rubber's fold step keeps the Python driver."""
+    rng = np.random.default_rng(3)
+    for b, J in ((1, 1), (1, 7), (2, 12), (3, 20)):
+        for n in (16, 64, 256):
+            r, xi = rng.random((b, J)), rng.standard_normal((b, J, n))
+            if _arm_sums(r, xi).tobytes() != np.einsum("bj,bjn->bn", r, xi).tobytes():
+                return False
+    return True
 
 
 def _recipe(loop, factory: str, args: tuple):
