@@ -28,6 +28,28 @@ from slipchain.model.config import make_config
 from slipchain.model.system import build_system, initial_state
 
 N_SAMPLES = 20
+STATE = ("x", "u", "X", "U", "ysolve", "bstate", "carry")
+
+
+def compare(cfg, driver, repeat: int):
+    """The Python driver (``driver`` given its FFT module) and the compiled one from the same state: (whether
+    the state and the chunk's outputs are bit-identical, best seconds of each, base steps of the run)."""
+    system = build_system(cfg)
+    batch0 = Batch.pack([system], [initial_state(system)])
+    ends, cost = {}, {}
+    for name, kw in (("python", {"fft": fft_module()}), ("compiled", {})):
+        driver(copy.deepcopy(batch0), N_SAMPLES, cfg.sample_steps, **kw)  # compile or load
+        times = []
+        for _ in range(repeat):
+            b = copy.deepcopy(batch0)
+            t = time.perf_counter()
+            r = driver(b, N_SAMPLES, cfg.sample_steps, **kw)
+            times.append(time.perf_counter() - t)
+        ends[name], cost[name] = (b, r), min(times)
+    (b1, r1), (b2, r2) = ends["python"], ends["compiled"]
+    same = all(getattr(b1, k) is None or np.array_equal(getattr(b1, k), getattr(b2, k)) for k in STATE) and all(
+        np.array_equal(getattr(r1, k), getattr(r2, k)) for k in ("out", "acc", "cacc"))
+    return same, cost["python"], cost["compiled"], int(b2.step[0])
 
 
 def main() -> None:
@@ -35,49 +57,17 @@ def main() -> None:
     for L, integrator in ((8, "fold"), (16, "fold"), (64, "fold"), (16, "adaptive")):
         cfg = make_config(geometry="slab", N=L, Ly=L, theta=0.5, epsilon=1e-2, integrator=integrator, dt=5e-8,
                           start="steady", t_total=2e-3, output_interval=1e-4, seed=1)
-        system = build_system(cfg)
-        batch0 = Batch.pack([system], [initial_state(system)])
-        drivers = {"python": lambda b: compose.fft_advance(b, N_SAMPLES, cfg.sample_steps, fft=fft_module()),
-                   "compiled": lambda b: compose.fft_advance(b, N_SAMPLES, cfg.sample_steps)}
-        ends, cost = {}, {}
-        for name, advance in drivers.items():
-            advance(copy.deepcopy(batch0))  # compile or load
-            times = []
-            for _ in range(3):
-                b = copy.deepcopy(batch0)
-                t = time.perf_counter()
-                r = advance(b)
-                times.append(time.perf_counter() - t)
-            ends[name] = (b, r)
-            cost[name] = min(times) / (N_SAMPLES * cfg.sample_steps) * 1e6
-        (b1, r1), (b2, r2) = ends["python"], ends["compiled"]
-        same = all(np.array_equal(getattr(b1, k), getattr(b2, k)) for k in ("x", "u", "X", "U", "ysolve")) and all(
-            np.array_equal(getattr(r1, k), getattr(r2, k)) for k in ("out", "acc", "cacc"))
-        print(f"{L:3d} x {L:<3d} {integrator} step: bit-identical {same}; Python driver {cost['python']:.1f} us/step, "
-              f"compiled chunk {cost['compiled']:.1f} us/step ({cost['python'] / cost['compiled']:.2f}x)")
+        same, py, co, _ = compare(cfg, compose.fft_advance, 3)
+        per = 1e6 / (N_SAMPLES * cfg.sample_steps)
+        print(f"{L:3d} x {L:<3d} {integrator} step: bit-identical {same}; Python driver {py * per:.1f} us/step, "
+              f"compiled chunk {co * per:.1f} us/step ({py / co:.2f}x)")
     for integrator, driver in (("implicit", compose.krylov_implicit_advance), ("fold", compose.fft_advance)):
         cfg = make_config(geometry="slab", N=16, Ly=16, N_L=50, epsilon=1.0, material="prony", integrator=integrator,
                           dt=1e-7, eta_c=1e5, theta=1.0, dead_weight=0.95, top_mass="tester", start="rest", t_ramp=1e-3,
                           output_interval=1e-3, t_total=0.02, seed=0)
-        system = build_system(cfg)
-        batch0 = Batch.pack([system], [initial_state(system)])
-        drivers = {"python": lambda b: driver(b, 20, cfg.sample_steps, fft=fft_module()),
-                   "compiled": lambda b: driver(b, 20, cfg.sample_steps)}
-        ends, cost = {}, {}
-        for name, advance in drivers.items():
-            advance(copy.deepcopy(batch0))
-            times = []
-            for _ in range(2):
-                b = copy.deepcopy(batch0)
-                t = time.perf_counter()
-                r = advance(b)
-                times.append(time.perf_counter() - t)
-            ends[name], cost[name] = (b, r), min(times)
-        (b1, r1), (b2, r2) = ends["python"], ends["compiled"]
-        same = all(np.array_equal(getattr(b1, k), getattr(b2, k)) for k in ("x", "u", "X", "U", "bstate")) and all(
-            np.array_equal(getattr(r1, k), getattr(r2, k)) for k in ("out", "acc", "cacc"))
-        print(f"tester 16 x 16, {integrator}, 20 ms ({int(b2.step[0])} base steps): bit-identical {same}; Python driver "
-              f"{cost['python']:.2f} s, compiled {cost['compiled']:.2f} s ({cost['python'] / cost['compiled']:.2f}x)")
+        same, py, co, steps = compare(cfg, driver, 2)
+        print(f"tester 16 x 16, {integrator}, 20 ms ({steps} base steps): bit-identical {same}; Python driver "
+              f"{py:.2f} s, compiled {co:.2f} s ({py / co:.2f}x)")
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ stepper, contact solver and drive):
 * **Driver**: the loop over rows, samples and steps. :func:`kernel_driver` runs a whole chunk of a
   row in one compiled call (the chains: the body needs nothing from outside); the slab's body needs
   one FFT of every row per step, so its driver (:func:`fft_advance`) alternates the FFT with
-  :func:`rows_driver`, one step of every live row; with the elastic body's explicit steppers the whole chunk is
+  :func:`rows_driver`, one step of every live row; with its explicit steppers (no top of its own) the whole chunk is
   one compiled call with its FFTs inside (:func:`fft_chunk_driver`, numpy.fft compiled by rocket-fft), and
   the implicit stepper's explicit steps between two tries are one compiled call per row
   (:func:`krylov_explicit_driver`).
@@ -1010,8 +1010,8 @@ def _loop(body: str, adaptive: bool | str):
 
 @functools.cache
 def _fft_chunk(body: str, adaptive: bool = False):
-    """The whole-chunk loop of the elastic spectral body's fixed or adaptive step (:func:`fft_chunk_driver`;
-    the step's flags as :func:`_loop`'s)."""
+    """The whole-chunk loop of the spectral body's fixed or adaptive step, elastic or 'spectral-prony'
+    (:func:`fft_chunk_driver`; the step's flags as :func:`_loop`'s)."""
     explicit, commit, fastmath = _body(body)
     step_rows = rows_driver(stepper(body, adaptive), fastmath and not adaptive, cached=False)
     return _recipe(fft_chunk_driver(step_rows, adaptive, body == "spectral-prony"), "_fft_chunk", (body, adaptive))
