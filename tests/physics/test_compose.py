@@ -182,3 +182,20 @@ def test_the_implicit_steppers_explicit_steps_compiled_give_the_python_drivers_b
         for name in ("out", "acc", "cacc"):
             assert np.array_equal(getattr(compiled, name), getattr(python, name)), (cfg, name)
         assert one.step_control[0, 2] > 0 and np.abs(one.x - batch.x).max() > 0  # explicit steps taken; it moved
+
+
+def test_without_rocket_fft_the_slab_keeps_its_python_driver(monkeypatch):
+    """Where rocket-fft cannot be imported (a user's environment without it), numba_fft says so, and
+    fft_advance and krylov_implicit_advance then take their per-step Python drivers (which the two tests
+    above show give the compiled chunks' bits)."""
+    import sys
+
+    from slipchain.engine.backends import pocketfft
+
+    assert pocketfft.numba_fft() is True  # here rocket-fft is installed (a dependency)
+    pocketfft.numba_fft.cache_clear()
+    monkeypatch.setitem(sys.modules, "rocket_fft", None)  # import rocket_fft raises ImportError
+    try:
+        assert pocketfft.numba_fft() is False
+    finally:
+        pocketfft.numba_fft.cache_clear()  # the next call checks again, rocket_fft back in sys.modules
