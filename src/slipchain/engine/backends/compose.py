@@ -496,6 +496,18 @@ _end_sample_in_loop = nb.njit(spectral.end_sample.py_func)  # spectral.end_sampl
 # a compiled loop compiles its own copy
 
 
+@nb.njit
+def _add_arm_sums(g, r, xi):
+    """g += sum_j r_j xi_j of each row (the arms' field; rows, then arms, then sites: the order numpy's
+    ``einsum("bj,bjn->bn")`` sums in). Not cached: :func:`fft_chunk_driver`'s chunk compiles its own copy, and
+    :func:`_arm_sums` checks this very loop (:func:`numba_einsum`)."""
+    b, J, n = xi.shape
+    for row in range(b):
+        for j in range(J):
+            for i in range(n):
+                g[row, i] += r[row, j] * xi[row, j, i]
+
+
 def fft_chunk_driver(step_rows, adaptive: bool, prony: bool = False):
     """The slab's and half-space's explicit steppers (the fixed step, integrators 'fixed' and 'fold', or the
     adaptive step, ``adaptive``: the rows in lock-step, one accepted step per FFT) with the elastic body or
@@ -531,9 +543,7 @@ def fft_chunk_driver(step_rows, adaptive: bool, prony: bool = False):
                     for row in range(b):
                         for i in range(n):
                             pair[row, i] = x[row, i] - X[row, i]
-                        for j in range(J):
-                            for i in range(n):
-                                pair[b + row, i] += material[row, 0, j] * bstate[row, j, i]
+                    _add_arm_sums(pair[b:], material[:, 0, :], bstate[:, :J, :])
                     spec = np.fft.rfft2(pair.reshape((2 * b, lx, ly)), axes=(1, 2))
                     spec *= neg
                     both = np.fft.irfft2(spec, s=(lx, ly), axes=(1, 2)).reshape((2 * b, n))
@@ -1019,14 +1029,10 @@ def _fft_chunk(body: str, adaptive: bool = False):
 
 @nb.njit(cache=True)
 def _arm_sums(r, xi):
-    """g = sum_j r_j xi_j of each row, as :func:`fft_chunk_driver` sums it (:func:`numba_einsum`; called from
-    Python only)."""
-    b, J, n = xi.shape
-    g = np.zeros((b, n))
-    for row in range(b):
-        for j in range(J):
-            for i in range(n):
-                g[row, i] += r[row, j] * xi[row, j, i]
+    """g = sum_j r_j xi_j of each row by the loop :func:`fft_chunk_driver` runs (:func:`numba_einsum`; called
+    from Python only)."""
+    g = np.zeros((xi.shape[0], xi.shape[2]))
+    _add_arm_sums(g, r, xi)
     return g
 
 
