@@ -31,25 +31,29 @@ N_SAMPLES = 20
 STATE = ("x", "u", "X", "U", "ysolve", "bstate", "carry")
 
 
+def best_time(cfg, driver, repeat: int, **kw):
+    """``driver`` (with ``kw``) over N_SAMPLES samples from the config's start, after one run to compile or
+    load it: (the last run's batch, its chunk output, the best of ``repeat`` runs in seconds)."""
+    system = build_system(cfg)
+    batch0 = Batch.pack([system], [initial_state(system)])
+    driver(copy.deepcopy(batch0), N_SAMPLES, cfg.sample_steps, **kw)  # compile or load
+    times = []
+    for _ in range(repeat):
+        b = copy.deepcopy(batch0)
+        t = time.perf_counter()
+        r = driver(b, N_SAMPLES, cfg.sample_steps, **kw)
+        times.append(time.perf_counter() - t)
+    return b, r, min(times)
+
+
 def compare(cfg, driver, repeat: int):
     """The Python driver (``driver`` given its FFT module) and the compiled one from the same state: (whether
     the state and the chunk's outputs are bit-identical, best seconds of each, base steps of the run)."""
-    system = build_system(cfg)
-    batch0 = Batch.pack([system], [initial_state(system)])
-    ends, cost = {}, {}
-    for name, kw in (("python", {"fft": fft_module()}), ("compiled", {})):
-        driver(copy.deepcopy(batch0), N_SAMPLES, cfg.sample_steps, **kw)  # compile or load
-        times = []
-        for _ in range(repeat):
-            b = copy.deepcopy(batch0)
-            t = time.perf_counter()
-            r = driver(b, N_SAMPLES, cfg.sample_steps, **kw)
-            times.append(time.perf_counter() - t)
-        ends[name], cost[name] = (b, r), min(times)
-    (b1, r1), (b2, r2) = ends["python"], ends["compiled"]
+    b1, r1, python = best_time(cfg, driver, repeat, fft=fft_module())
+    b2, r2, compiled = best_time(cfg, driver, repeat)
     same = all(getattr(b1, k) is None or np.array_equal(getattr(b1, k), getattr(b2, k)) for k in STATE) and all(
         np.array_equal(getattr(r1, k), getattr(r2, k)) for k in ("out", "acc", "cacc"))
-    return same, cost["python"], cost["compiled"], int(b2.step[0])
+    return same, python, compiled, int(b2.step[0])
 
 
 def main() -> None:

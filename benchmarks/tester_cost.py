@@ -29,6 +29,14 @@ from slipchain.model.config import make_config  # noqa: E402
 INTERVAL = 2.5e-4
 
 
+def tester_config(L: int, **overrides):
+    """The tester's block on an L x L interface (module docstring), its first N_SAMPLES samples of INTERVAL."""
+    cfg = dict(geometry="slab", N=L, Ly=L, N_L=50, epsilon=1.0, material="prony", integrator="fold", dt=1e-7,
+               eta_c=1e5, theta=1.0, dead_weight=0.95, top_mass="tester", start="rest", t_ramp=1e-3,
+               output_interval=INTERVAL, t_total=N_SAMPLES * INTERVAL, seed=0)
+    return make_config(**{**cfg, **overrides})
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", type=int, nargs="+", default=[16, 32, 64, 128])
@@ -38,10 +46,7 @@ def main() -> None:
           f"first {t_sim * 1e3:g} ms; wall seconds per simulated second (best of 1 after a warm-up run)", flush=True)
     for L in args.sizes:
         for integrator, driver in (("fold", compose.fft_advance), ("implicit", compose.krylov_implicit_advance)):
-            cfg = make_config(geometry="slab", N=L, Ly=L, N_L=50, epsilon=1.0, material="prony", integrator=integrator,
-                              dt=1e-7, eta_c=1e5, theta=1.0, dead_weight=0.95, top_mass="tester", start="rest",
-                              t_ramp=1e-3, output_interval=INTERVAL, t_total=t_sim, seed=0)
-            same, py, co, steps = compare(cfg, driver, 1)
+            same, py, co, steps = compare(tester_config(L, integrator=integrator), driver, 1)
             print(f"{L:4d} x {L:<4d} {integrator:8s} ({steps} base steps): bit-identical {same}; Python driver "
                   f"{py / t_sim:8.0f} s/s, compiled {co / t_sim:8.0f} s/s ({py / co:.2f}x)", flush=True)
 
