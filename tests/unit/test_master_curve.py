@@ -22,6 +22,21 @@ def _write(path, E_inf, E, tau, unit="MPa", freq=FREQ):
     return path
 
 
+def _assert_finds_the_planted_terms(fit_tau, fit_E, E_inf, E, tau):
+    """The planted times lie on the fit's decade grid: each is found with its modulus (measured: within
+    0.6 %), and the terms between them carry almost nothing (measured: 3e-5 of E_0). Matched to 1e-4
+    decades, not by rounding: the fitted times differ from the decades in the 6th digit on some CPUs
+    (e.g. 10**-7.00000123). Which near-zero terms the optimiser leaves above the fit's NEGLIGIBLE, and
+    where, depends on the CPU (an AVX-512 Zen 5 keeps three, at 8.9e-9, 1.5e-8 and 1e3 s, 2e3 to 2e4 Pa
+    beside E_0 = 1 GPa; an AVX2 EPYC none), so no test counts the terms."""
+    got = dict(zip(np.log10(fit_tau), fit_E))
+    for t, e in zip(tau, E):
+        near = min(got, key=lambda lt: abs(lt - np.log10(t)))
+        assert abs(near - np.log10(t)) < 1e-4
+        assert got.pop(near) == pytest.approx(e, rel=2e-2)
+    assert sum(got.values()) < 1e-4 * (E_inf + sum(E))
+
+
 @pytest.mark.parametrize("planted", [
     (10e6, DEFAULT_COMPOUND.E, DEFAULT_COMPOUND.tau),  # the default compound: ten terms, one per decade
     (3e6, (2e8, 5e7, 4e7, 1e6), (1e-7, 1e-5, 1e-4, 1e-1)),  # a gap of a decade, uneven moduli
@@ -29,16 +44,7 @@ def _write(path, E_inf, E, tau, unit="MPa", freq=FREQ):
 def test_fit_recovers_planted_prony_terms(tmp_path, planted):
     E_inf, E, tau = planted
     fit = fit_master_curve(_write(tmp_path / "m.csv", E_inf, E, tau), T_ref=20.0)
-    # the planted times lie on the fit's decade grid: each is found with its modulus (measured: within
-    # 0.6 %), and the terms between them carry almost nothing (measured: 3e-5 of E_0)
-    # (matched to 1e-4 decades, not by rounding: the fitted times differ from the decades in the 6th digit
-    # on some CPUs, e.g. 10**-7.00000123)
-    got = dict(zip(np.log10(fit.tau), fit.E))
-    for t, e in zip(tau, E):
-        near = min(got, key=lambda lt: abs(lt - np.log10(t)))
-        assert abs(near - np.log10(t)) < 1e-4
-        assert got.pop(near) == pytest.approx(e, rel=2e-2)
-    assert sum(got.values()) < 1e-4 * (E_inf + sum(E))
+    _assert_finds_the_planted_terms(fit.tau, fit.E, E_inf, E, tau)
     assert fit.E_inf == pytest.approx(E_inf, rel=1e-2)
     assert fit.err_storage < 1e-2 and fit.err_loss < 1e-2
 
@@ -62,8 +68,8 @@ def test_material_fit_writes_a_config_that_runs_the_fitted_compound(tmp_path, sl
     assert {p.name for p in (tmp_path / "o").iterdir()} == {"compound.toml", "master_curve_fit.png", "master_curve_fit.pdf"}
     cfg = load_config(tmp_path / "o" / "compound.toml")
     assert cfg.material == "prony" and cfg.T_ref == 15 and (cfg.wlf_C1, cfg.wlf_C2) == (8, 120)
-    assert cfg.E == pytest.approx(10e6, rel=1e-2) and np.allclose(cfg.prony_tau, DEFAULT_COMPOUND.tau)
-    assert np.allclose(cfg.prony_E, DEFAULT_COMPOUND.E, rtol=2e-2)
+    assert cfg.E == pytest.approx(10e6, rel=1e-2)
+    _assert_finds_the_planted_terms(cfg.prony_tau, cfg.prony_E, 10e6, DEFAULT_COMPOUND.E, DEFAULT_COMPOUND.tau)
 
 
 @pytest.mark.parametrize("text, says", [
