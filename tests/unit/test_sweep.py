@@ -187,3 +187,62 @@ def test_every_shipped_preset_is_catalogued_and_found_by_name(tmp_path, monkeypa
     assert find_study("quick") == files["fig6-quick"] and find_study("nonesuch") is None
     (tmp_path / "quick").write_text("")
     assert find_study("quick").resolve() == (tmp_path / "quick").resolve()
+
+
+def test_a_study_extends_another_as_if_written_out_flat(tmp_path):
+    """``extends``: the parent's tables laid under the child's key by key, its grids and name replaced;
+    members, ids and digest those of the flat file the child stands for. The shipped variants resolve
+    to the sweeps their committed stores recorded flat (the store's own sweep.toml: a frozen reference)."""
+    import tomllib
+    from pathlib import Path
+
+    from slipchain.sweeps.catalogue import preset_files, read_study
+    from slipchain.workflows.dead_weight import load_plan
+
+    (tmp_path / "parent.toml").write_text('name = "parent"\n[base]\nN = 31\nstart = "steady"\nv0 = 0.01\n'
+                                          't_total = 3e-3\ntheta = 0.5\n[[grid]]\nseed = [0, 1]\n')
+    (tmp_path / "child.toml").write_text('extends = "parent.toml"\n[base]\ntheta = 1.0\n')
+    (tmp_path / "grandchild.toml").write_text('name = "g"\nextends = "child.toml"\n[base]\nN = 41\n'
+                                              '[[grid]]\nseed = [3]\ndelta = [0.2, 0.3]\n')
+    flat = make_sweep({"base": {**FAST, "theta": 1.0, "delta": 0.5}, "grid": {"seed": [0, 1]}})
+    child = load_sweep_definition(tmp_path / "child.toml")
+    assert child.name == "sweep" and child.digest == flat.digest  # the parent's name is not inherited
+    assert [m.config for m in child.members] == [m.config for m in flat.members]
+    grand = load_sweep_definition(tmp_path / "grandchild.toml")
+    assert grand.name == "g" and grand.dims == ("seed", "delta")
+    assert [(m.config.N, m.config.theta, m.config.start, m.config.seed, m.config.delta) for m in grand.members] == \
+        [(41, 1.0, "steady", 3, 0.2), (41, 1.0, "steady", 3, 0.3)]
+    assert make_sweep(tomllib.loads(grand.to_toml())).digest == grand.digest  # written out flat, the same sweep
+    # a shipped name when no file of that name lies beside it
+    (tmp_path / "by-name.toml").write_text('extends = "tester-32-slower"\n[base]\nN = 64\nLy = 64\n'
+                                           'krylov_preconditioner = "additive"\n')
+    stores = Path(__file__).resolve().parents[2] / "stores"
+    for n in (64, 128):
+        recorded = load_sweep_definition(stores / f"tester-{n}-slower" / "sweep.toml", legacy=True)
+        assert load_sweep_definition(preset_files()[f"tester-{n}-slower"]).digest == recorded.digest
+    assert load_sweep_definition(tmp_path / "by-name.toml").digest == load_sweep_definition(
+        stores / "tester-64-slower" / "sweep.toml", legacy=True).digest
+    # a plan: [bisection] merged key by key too
+    plan, parent = load_plan(preset_files()["mu-max-rubber-400ms"]), load_plan(preset_files()["mu-max-rubber"])
+    assert plan.name == "mu-max-rubber-400ms" and plan.theta == (0.5,) and plan.seeds == parent.seeds == 2
+    assert (plan.base.t_ramp, plan.base.t_decide) == (0.4, 0.6) and plan.base.material == parent.base.material
+    assert plan.base.with_updates(t_ramp=0.2, t_decide=0.4) == parent.base
+    assert "extends" not in read_study(tmp_path / "grandchild.toml")
+
+
+@pytest.mark.parametrize("extends, words", [
+    ('"nonesuch"', ["key 'extends' has value 'nonesuch'", "expected a study file beside it or a shipped preset",
+                    "tester-32-slower"]),
+    ("3", ["key 'extends' has value 3", "expected the name of a shipped preset or the path of a study file"]),
+    ('"loop.toml"', ["loop.toml': key 'extends' has value 'bad.toml'", "leads back to itself",
+                     "bad.toml -> loop.toml -> bad.toml",
+                     "expected a chain that ends in a study without 'extends'"]),
+])
+def test_a_bad_extends_is_refused_naming_key_value_and_what_was_expected(tmp_path, slipchain_cli, extends, words):
+    (tmp_path / "loop.toml").write_text('extends = "bad.toml"\n[[grid]]\nseed = [0]\n')
+    (tmp_path / "bad.toml").write_text(f'extends = {extends}\n[base]\nN = 31\n[[grid]]\nseed = [0]\n')
+    with pytest.raises(SweepError) as err:
+        load_sweep_definition(tmp_path / "bad.toml")
+    assert all(w in str(err.value) for w in words), str(err.value)
+    r = slipchain_cli("sweep", str(tmp_path / "bad.toml"), "--store", str(tmp_path / "store"))
+    assert r.returncode == 2 and "extends" in r.stderr and not (tmp_path / "store").exists()

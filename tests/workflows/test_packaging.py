@@ -117,12 +117,14 @@ def test_the_wheel_in_a_fresh_venv_runs_a_model_and_finds_its_presets(dist, tmp_
     assert where.returncode == 0, where.stderr
     module, counts = where.stdout.split("\n")[:2]
     assert Path(module).is_relative_to(venv) and counts == "60 368"  # the installed copy, with its presets
-    # Issue 30: every study by name, from an empty folder outside the repository
+    # Issue 30: every study by name, from an empty folder outside the repository (tester-128-slower extends
+    # tester-32-slower by name: resolved inside the installed package)
     empty = tmp_path / "empty"
     empty.mkdir()
     for args, words in ((["presets"], "validation campaign"),
                         (["sweep", "fig6-3d", "--store", "x", "--dry-run"], "100 would run"),
                         (["sweep", "quick", "--store", "q", "--dry-run"], "60 would run"),
+                        (["sweep", "tester-128-slower", "--store", "t", "--dry-run"], "8 would run"),  # extends
                         (["mu-max", "mu-max", "--out", "m", "--dry-run"], "Nothing run or written")):
         r = subprocess.run([str(exe), *args], capture_output=True, text=True, env={**env, "COLUMNS": "200"}, cwd=empty,
                            timeout=300)

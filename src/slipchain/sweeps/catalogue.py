@@ -16,6 +16,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import Any
+
+from ..model.config import ConfigError, read_toml
 
 
 @dataclass(frozen=True)
@@ -133,10 +136,51 @@ def find_study(name_or_path: str | Path) -> Path | None:
     return files.get(name) or files.get(f"fig6-{name}")
 
 
+def read_study(path: str | Path) -> dict[str, Any]:
+    """A study file (sweep or mu-max plan) as plain data, with its ``extends`` resolved.
+
+    ``extends = "NAME"`` at the top of a study makes it a variant of another: NAME is a study file
+    beside it (a path relative to the extending file's folder) or, failing that, a shipped preset's name.
+    The parent is read first (itself possibly extending another) and the child's keys laid over it:
+    a table (``[base]``, ``[bisection]``) key by key, anything else (``[[grid]]``, ``name``) whole; the
+    parent's ``name`` is never inherited. What results is the flat study the child would have been
+    written out as, so members, ids and the sweep's digest are the same as for that flat file (a
+    store records the flat definition). ConfigError names the file, the key and the value for a parent
+    that is neither a file nor a shipped preset, a value that is not a string, and a cycle.
+    """
+    return _read_study(Path(path), ())
+
+
+def _read_study(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
+    data = dict(read_toml(path))
+    if "extends" not in data:
+        return data
+    parent = data.pop("extends")
+    where = f"study file {str(path)!r}: key 'extends' has value {parent!r}"
+    if not isinstance(parent, str) or not parent.strip():
+        raise ConfigError(f"{where}; expected the name of a shipped preset or the path of a study file")
+    beside = path.parent / parent
+    found = beside if beside.is_file() else preset_files().get(parent.removesuffix(".toml"))
+    if found is None:
+        raise ConfigError(f"{where}; expected a study file beside it or a shipped preset: "
+                          f"{', '.join(sorted(preset_files()))}")
+    here = chain + (path.resolve(),)
+    if found.resolve() in here:
+        cycle = " -> ".join(str(p.name) for p in here + (found.resolve(),))
+        raise ConfigError(f"{where}, which leads back to itself ({cycle}); expected a chain that ends in a "
+                          "study without 'extends'")
+    merged = _read_study(found, here)
+    merged.pop("name", None)
+    for key, value in data.items():
+        old = merged.get(key)
+        merged[key] = {**old, **value} if isinstance(old, dict) and isinstance(value, dict) else value
+    return merged
+
+
 def missing_message(what: str, given: str | Path) -> str:
     """The error for a study that is neither a file nor a shipped name."""
     return (f"{what} {str(given)!r} is neither a file nor the name of a shipped preset; shipped: "
             f"{', '.join(sorted(preset_files()))} (`slipchain presets` lists them)")
 
 
-__all__ = ["CATALOGUE", "Study", "find_study", "missing_message", "preset_files"]
+__all__ = ["CATALOGUE", "Study", "find_study", "missing_message", "preset_files", "read_study"]

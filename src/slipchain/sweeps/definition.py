@@ -45,8 +45,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..model.config import OFF, Config, ConfigError, make_config, read_toml
-from .catalogue import preset_files
+from ..model.config import OFF, Config, ConfigError, make_config
+from .catalogue import preset_files, read_study
 
 
 class SweepError(ValueError):
@@ -258,9 +258,10 @@ def _is_float_key(key: str) -> bool:
 
 
 def load_sweep_definition(path: str | Path, *, legacy: bool = False) -> SweepDefinition:
-    """Read and validate a sweep TOML file (``legacy``: see :func:`make_sweep`)."""
+    """Read and validate a sweep TOML file (``legacy``: see :func:`make_sweep`; ``extends``: see
+    :func:`~slipchain.sweeps.catalogue.read_study`)."""
     try:
-        data = read_toml(path)
+        data = read_study(path)
     except ConfigError as e:
         raise SweepError(str(e).replace("config file", "sweep file")) from None
     return make_sweep(data, source=f"sweep file {str(path)!r}", legacy=legacy)

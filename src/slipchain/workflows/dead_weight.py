@@ -431,10 +431,12 @@ class Plan:
 
 def load_plan(path: str | os.PathLike | None, overrides: list[str] = (), **settings: Any) -> Plan:
     """A :class:`Plan` from a TOML file (``[base]`` and ``[bisection]``; a flat file is a base config
-    alone), ``name=value`` overrides of the base, then explicit ``settings`` (None: not given)."""
-    from ..model.config import parse_override, read_toml
+    alone; ``extends``: :func:`~slipchain.sweeps.catalogue.read_study`), ``name=value`` overrides of the
+    base, then explicit ``settings`` (None: not given)."""
+    from ..model.config import parse_override
+    from ..sweeps.catalogue import read_study
 
-    data = read_toml(path) if path is not None else {}
+    data = read_study(path) if path is not None else {}
     is_plan = "base" in data or "bisection" in data
     base = dict(data.get("base", {})) if is_plan else dict(data)
     if is_plan:
