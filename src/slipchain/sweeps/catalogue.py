@@ -95,6 +95,8 @@ CATALOGUE: dict[str, Study] = {
                              "tester-16-slower's 6-s bracket, 0.95 and 1.05, for seeds 1 and 2"),
     "tester-16-11c-slow": Study("study", 8, "all 8 run (570-2 900 s each, 3.5 core-hours; partly on 16 CPUs, partly before the compiled steps)", "docs/tester-3d/index.md",
                                 "tester-16-seeds' 6-s bracket, 0.95 and 1.05, at Fig. 3's 11 °C (seed 0)"),
+    "tester-32-seeds": Study("study", 16, "not yet measured (the steady side: 150-450 s a run on one core)",
+                             "docs/tester-3d/index.md", "tester-32-slower for seeds 1 and 2"),
     "tester-32-slower": Study("study", 8, "all 8 run (154-2 601 s each, 2.0 core-hours; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                               "tester-16-slower's 6-s bracket, 0.95 and 1.05, on a 32 x 32 interface (seed 0)"),
     "tester-64-slower": Study("study", 8, "4 of 8 run, the steady side (502-645 s each; a Zen 5 EPYC)", "docs/tester-3d/index.md",
