@@ -173,6 +173,24 @@ def dead_weight(
         fail(str(e))
 
 
+@figure_app.command("traces")
+def traces(
+    store: Annotated[list[Path], typer.Option("--store", help="Store of a sweep of dead-weight runs (e.g. presets/tester-16-long.toml); repeat it to read several.")],
+    out_dir: OutOpt,
+    window: Annotated[float, typer.Option("--window", help="Seconds over which each drawn velocity is the mean (the distance travelled over the window's length).")] = 0.02,
+) -> None:
+    """The top's velocity against time per run, one panel per theta, and mu_max from where slowly loaded runs run away; traces.csv, onsets.csv, mu_max.csv."""
+    if not window > 0:
+        fail(f"--window {window!r}: expected a positive number of seconds (e.g. 0.02)")
+    try:
+        paths, lines = _figures().traces(store, out_dir, window)
+    except SweepError as e:
+        fail(str(e))
+    wrote(paths)
+    for line in lines:
+        out.print(line)
+
+
 @figure_app.command("mu-max")
 def mu_max(
     result: Annotated[Path, typer.Option("--from", help="Output directory of `slipchain mu-max`.")],

@@ -8,6 +8,8 @@ the seed-mean mu_max as a bar, and the rising branch every contact would follow 
 beside the spring-drive maximum of mu_star(v_d) (the velocity sweep) on the same scale.
 :func:`plot_fit`: per tester group, the data per pressure with the fitted model's curves
 (:mod:`slipchain.analysis.fit`) and the observed against the fitted maxima.
+:func:`plot_velocity_traces`: the slider's velocity against time per run, one panel per load
+(:mod:`slipchain.analysis.traces`): the release's overshoot, the top's ringing, creep or runaway.
 """
 
 from __future__ import annotations
@@ -142,4 +144,52 @@ def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Pat
     return paths
 
 
-__all__ = ["plot_fit", "plot_mu_max", "spring_drive_maxima"]
+
+STATUS_STYLE = {"ok": "-", "runaway": "--", "no-steady": ":"}  # the tester's classification, by line style
+
+
+def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: float, out: str | os.PathLike) -> list[Path]:
+    """The top's velocity against time, one panel per theta, one line per run coloured by its applied
+    mu_a, styled by the tester's classification (solid steady, dashed runaway, dotted no steady
+    velocity); the decision's start (t_decide) and the ramp's end as vertical lines. The velocity axis
+    is symmetric-logarithmic (linear within 1e-5 m/s of zero): the release's overshoot, the creep and
+    the ringing through zero on one axis. Each runaway's onset read during the ramp (``onsets``) is a black
+    dot at its time. ``traces``, ``onsets``: :func:`slipchain.analysis.traces.velocity_traces`."""
+    plt = pyplot()
+    thetas = sorted(traces["theta"].unique())
+    fig, axes = plt.subplots(1, len(thetas), figsize=(4.0 * len(thetas) + 1.6, 4.2), sharey=True, squeeze=False)
+    weights = sorted(traces["mu_a"].unique())
+    cmap = plt.cm.plasma(np.linspace(0.0, 0.85, max(len(weights), 2)))
+    colors = dict(zip(weights, cmap))
+    for ax, th in zip(axes[0], thetas):
+        cur = traces[np.isclose(traces["theta"], th)]
+        for (mu_a, seed, _), g in cur.groupby(["mu_a", "seed", "member_id"]):
+            status = str(g["status"].iloc[0])
+            ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE.get(status, "-."), lw=1.0)
+        on = onsets[np.isclose(onsets["theta"], th) & onsets["during_ramp"].astype(bool)]
+        for _, r in on.iterrows():
+            g = cur[cur["member_id"] == r["member_id"]]
+            ax.plot(r["t_onset"], np.interp(r["t_onset"], g["t"], g["v"]), "o", color="k", ms=3, zorder=5)
+        for key, style in (("t_decide", ":"), ("t_ramp", "--")):
+            for value in cur[key].dropna().unique():
+                if value > 2 * window:  # a ramp within the first window is the weight at once
+                    ax.axvline(value, color="0.6", ls=style, lw=0.8)
+        ax.set_yscale("symlog", linthresh=1e-5)
+        ax.axhline(0.0, color="0.8", lw=0.6)
+        ax.set_xlabel("time (s)")
+        ax.set_title(rf"$\theta$ = {th:g}", fontsize=9)
+    axes[0][0].set_ylabel(f"velocity of the top over {window * 1e3:g} ms (m/s)")
+    Line2D = plt.matplotlib.lines.Line2D
+    handles = [Line2D([], [], color=colors[w], label=rf"$\mu_a$ = {w:g}") for w in weights]
+    handles += [Line2D([], [], color="0.3", ls=ls, label=label) for ls, label in
+                (("-", "steady"), ("--", "runaway"), (":", "no steady velocity"))]
+    handles += [Line2D([], [], color="0.6", ls=":", lw=0.8, label="decision from"),
+                Line2D([], [], color="0.6", ls="--", lw=0.8, label="ramp's end"),
+                Line2D([], [], marker="o", ls="none", color="k", ms=3, label="runaway's onset")]
+    fig.subplots_adjust(right=1.0 - 1.5 / fig.get_figwidth())
+    fig.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1.0 - 1.45 / fig.get_figwidth(), 0.5),
+               frameon=False)
+    fig.suptitle("The hanging weight's pull read as a tester's distance record: velocity against time", fontsize=10)
+    return save_figure(fig, out, "velocity_traces")
+
+__all__ = ["STATUS_STYLE", "plot_velocity_traces", "plot_fit", "plot_mu_max", "spring_drive_maxima"]

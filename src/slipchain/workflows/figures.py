@@ -6,6 +6,7 @@ import os
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import xarray as xr
 
@@ -129,6 +130,30 @@ def velocity(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
     return plot_dead_weight(sweep_dataset(store, {"dead_weight"}, "the dead-weight figure"), out)
+
+
+def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: float) -> tuple[list[Path], list[str]]:
+    """The top's velocity against time of every run of dead-weight stores, over windows of ``window`` s,
+    with each runaway's onset (:mod:`slipchain.analysis.traces`): the figure, traces.csv (one row per
+    window), onsets.csv (one row per run) and mu_max.csv (:func:`~slipchain.analysis.traces.onset_summary`);
+    returns the paths and one line per group of mu_max.csv."""
+    from ..analysis.traces import onset_summary, velocity_traces
+    from ..plots.dead_weight import plot_velocity_traces
+
+    frame, onsets = velocity_traces(stores, window)
+    summary = onset_summary(onsets)
+    paths = plot_velocity_traces(frame, onsets, window, out)
+    paths += [write_csv(frame, Path(out) / "traces.csv", float_format="%.6g"),
+              write_csv(onsets, Path(out) / "onsets.csv", float_format="%.6g"),
+              write_csv(summary, Path(out) / "mu_max.csv", float_format="%.6g")]
+    lines = []
+    for _, r in summary.iterrows():
+        se = f" ± {r['mu_max_se']:.4f}" if np.isfinite(r["mu_max_se"]) else ""
+        rse = f" ± {r['R_se']:.4f}" if np.isfinite(r["R_se"]) else ""
+        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C, ramp {r['t_ramp']:g} s, theta = {r['theta']:g}: mu_max "
+                     f"{r['mu_max']:.4f}{se} ({int(r['runs'])} run(s); read at 10 v0 10**delta {r['mu_max_10']:.4f}); "
+                     f"R = {r['R']:.4f}{rse} ({r['R_10']:.4f})")
+    return paths, lines
 
 
 def dead_weight_grid(stores: list[str | os.PathLike], by: str, out: str | os.PathLike,

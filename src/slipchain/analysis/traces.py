@@ -1,0 +1,168 @@
+"""The slider's velocity against time, as a tester's distance record shows it (issue 29), and the
+friction maximum read from where a slowly loaded slider runs away.
+
+A dead-weight run stores the upper layer's mean position <X>(t) (the top's position on the slab,
+``X_mean``) at every output sample. :func:`window_velocity` turns it into the mean velocity over
+windows of a given length, exactly from the positions (no differentiation of noise): the distance
+travelled across the window over its length, which is what a tester's distance record gives read at
+that resolution. :func:`velocity_traces` does it for every run of dead-weight stores.
+
+**The maximum from the runaway's onset** (:func:`runaway_onset`). While the hanging weight rises slowly
+(the ramp ``t_ramp``: F(t) = mu_a t/t_ramp in units of epsilon f0 theta), the slider follows the rising
+branch of mu(v); when the weight passes the branch's maximum mu_max there is no steady velocity left and
+the slider accelerates away. So the weight at the moment it runs away measures mu_max, to the weight's
+rise over one output sample, where a grid of weights (a bisection's bracket) resolves it only to its
+step. The moment is where the velocity over one sample passes ``k v0 10**delta`` (above the largest
+contact velocity scale v* of eq. (1), so above every velocity of the rising branch) for the last time:
+after it the velocity stays above. With k = 3 (:data:`ONSET_FACTOR`) the estimate converges to the
+analytic maximum of identical contacts as the ramp slows (tests/unit/test_traces.py: within 2e-4 at a
+ramp of 40 ms); ``mu_onset_10`` (k = 10) beside it says how much the choice of k matters. The weight
+keeps rising while the slider accelerates, and a faster ramp lets the slider lag behind the branch,
+so the estimate depends on the ramp's rate: compare loads at one ramp, and ramps with each other, to
+find the slow-loading limit.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ONSET_FACTOR = 3.0  # the runaway's onset: the velocity passes ONSET_FACTOR v0 10**delta for the last time
+ONSET_CHECK = 10.0  # ...and, for comparison, this multiple
+
+
+def window_velocity(time: np.ndarray, x: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
+    """The mean velocity over consecutive windows of length ``window`` (s): ``(x(t_j + window) - x(t_j)) /
+    window`` at the windows' midpoints, the windows starting at the first sample and stepping by
+    ``window / 2`` (so they overlap by half). Positions are taken at the samples nearest to each window's
+    ends (``window`` is rounded to a whole number of samples, at least one). Empty for a record shorter
+    than one window."""
+    time, x = np.asarray(time, float), np.asarray(x, float)
+    if time.size < 2:
+        return np.zeros(0), np.zeros(0)
+    dt = float(np.median(np.diff(time)))
+    n = max(int(round(window / dt)), 1)
+    step = max(n // 2, 1)
+    start = np.arange(0, time.size - n, step)
+    w = time[start + n] - time[start]
+    return 0.5 * (time[start] + time[start + n]), (x[start + n] - x[start]) / w
+
+
+def last_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
+    """The end of the first sample interval after which the velocity over every sample stays above
+    ``threshold`` (m/s): the last upward crossing, so early transients (a release's overshoot, the
+    top's ringing) do not count. NaN if the record ends at or below it."""
+    time, x = np.asarray(time, float), np.asarray(x, float)
+    v = np.diff(x) / np.diff(time)
+    if v.size == 0 or v[-1] <= threshold:
+        return float("nan")
+    below = np.nonzero(v <= threshold)[0]
+    j = below[-1] + 1 if below.size else 0
+    return float(time[j + 1])
+
+
+def runaway_onset(cfg, time: np.ndarray, x: np.ndarray) -> dict:
+    """The applied weight mu_a(t) = mu_a min(t / t_ramp, 1) at the runaway's onset (module docstring)
+    for one dead-weight run (its config and its ``X_mean`` record): ``mu_onset`` (ONSET_FACTOR),
+    ``mu_onset_10`` (ONSET_CHECK), ``t_onset`` (s), ``during_ramp`` (the onset came while the weight still
+    rose: otherwise mu_onset is the full weight, an upper bound of mu_max only) and ``resolution`` (the
+    weight's rise over one sample). NaN where the run does not run away or has no ramp to read (the
+    weight at once)."""
+    from ..model.system import dead_weight_ramp_time
+
+    ramp = dead_weight_ramp_time(cfg)
+    interval = float(np.median(np.diff(time))) if len(time) > 1 else float("nan")
+    nan = float("nan")
+    out = {"mu_onset": nan, "mu_onset_10": nan, "t_onset": nan, "during_ramp": False, "resolution": nan}
+    if ramp is None or not ramp > 2 * interval:
+        return out
+    scale = cfg.v0 * 10.0 ** cfg.delta
+    t_on, t_10 = (last_crossing(time, x, k * scale) for k in (ONSET_FACTOR, ONSET_CHECK))
+    weight = lambda t: cfg.dead_weight * min(t / ramp, 1.0)  # noqa: E731
+    return {"mu_onset": weight(t_on) if np.isfinite(t_on) else nan,
+            "mu_onset_10": weight(t_10) if np.isfinite(t_10) else nan,
+            "t_onset": t_on, "during_ramp": bool(np.isfinite(t_on) and t_on <= ramp),
+            "resolution": cfg.dead_weight * interval / ramp}
+
+
+KEYS = ("N", "temperature", "t_ramp", "theta")  # what distinguishes a group of runs in onset_summary
+
+
+def _runs(stores: list[str | os.PathLike]):
+    """(store name, member id, config, dataset) of every completed run of the stores; SweepError for a
+    store that is not one, holds no completed run, or a run without a dead weight."""
+    from ..model.config import config_from_toml
+    from ..sweeps.definition import SweepError
+    from ..sweeps.store import Store
+
+    for store in stores:
+        st = Store.open(store)
+        done = st.completed_ids()
+        if not done:
+            raise SweepError(f"store {os.fspath(store)!r} holds no completed run; expected a dead-weight sweep's store")
+        for m in st.sweep.members:
+            if m.id not in done:
+                continue
+            ds = st.read_member(m)
+            cfg = config_from_toml(ds.attrs["config"])
+            if cfg.dead_weight is None or "X_mean" not in ds:
+                raise SweepError(f"store {os.fspath(store)!r}: member {m.id} is not a dead-weight run (dead_weight = "
+                                 f"{cfg.dead_weight!r}); expected a sweep of dead-weight runs (e.g. presets/tester-16.toml)")
+            yield Path(store).name, m.id, cfg, ds
+
+
+def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Every completed run of dead-weight sweep stores: its windowed velocities (:func:`window_velocity`;
+    columns store, member_id, N, temperature, theta, seed, mu_a, t_ramp, t_decide, status (the tester's
+    classification the run recorded), t (s), v (m/s)) and its runaway onset (:func:`runaway_onset`; one
+    row per run, the same identifying columns). SweepError naming the store for one that is not a store,
+    holds no completed run, or holds runs without a dead weight; ValueError for a window that is not a
+    positive number of seconds."""
+    if not (isinstance(window, (int, float)) and np.isfinite(window) and window > 0):
+        raise ValueError(f"window has value {window!r}; expected a positive number of seconds (e.g. 0.02)")
+    traces, onsets = [], []
+    for store, mid, cfg, ds in _runs(stores):
+        who = {"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "theta": cfg.theta,
+               "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": cfg.t_ramp, "t_decide": cfg.t_decide,
+               "status": ds.attrs.get("velocity_status", "")}
+        time, x = ds["time"].values, ds["X_mean"].values
+        t, v = window_velocity(time, x, window)
+        traces.append(pd.DataFrame({**who, "t": t, "v": v}))
+        onsets.append({**who, **runaway_onset(cfg, time, x)})
+    return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets)
+
+
+def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
+    """mu_max per group of runs (:data:`KEYS`: interface, temperature, ramp, load) from the onsets read
+    during the ramp: the mean over runs (seeds; a seed with several weights counts once, its mean), its
+    standard error (the seeds' scatter; NaN for one), the mean read at the check threshold
+    (``mu_max_10``), and R = the group's mean over the smallest load's at the same interface, temperature
+    and ramp, with its standard error (independent errors), and ``R_10`` the same at the check threshold
+    (how much R depends on where the onset is read)."""
+    ok = onsets[onsets["during_ramp"].astype(bool)]
+    per_seed = ok.groupby([*KEYS, "seed"], dropna=False).agg(mu=("mu_onset", "mean"), mu_10=("mu_onset_10", "mean"),
+                                                            resolution=("resolution", "max")).reset_index()
+    rows = []
+    for key, g in per_seed.groupby(list(KEYS), dropna=False):
+        n = len(g)
+        rows.append({**dict(zip(KEYS, key)), "runs": n, "mu_max": g["mu"].mean(),
+                     "mu_max_se": g["mu"].std(ddof=1) / np.sqrt(n) if n > 1 else np.nan,
+                     "mu_max_10": g["mu_10"].mean(), "resolution": g["resolution"].max()})
+    table = pd.DataFrame(rows, columns=[*KEYS, "runs", "mu_max", "mu_max_se", "mu_max_10", "resolution"])
+    ratio = pd.Series(np.nan, index=table.index)
+    ratio_se, ratio_10 = ratio.copy(), ratio.copy()
+    for _, same in table.groupby(["N", "temperature", "t_ramp"], dropna=False):  # elastic runs: temperature NaN
+        low = same.loc[same["theta"].idxmin()]
+        q = same["mu_max"] / low["mu_max"]
+        ratio[same.index] = q
+        ratio_se[same.index] = q * np.hypot(same["mu_max_se"] / same["mu_max"], low["mu_max_se"] / low["mu_max"])
+        ratio_se[low.name] = 0.0
+        ratio_10[same.index] = same["mu_max_10"] / low["mu_max_10"]
+    return table.assign(R=ratio.to_numpy(), R_se=ratio_se.to_numpy(), R_10=ratio_10.to_numpy())
+
+
+__all__ = ["KEYS", "ONSET_CHECK", "ONSET_FACTOR", "last_crossing", "onset_summary", "runaway_onset", "velocity_traces",
+           "window_velocity"]

@@ -1,0 +1,101 @@
+"""The velocity record of a dead-weight run and mu_max read from where a slowly loaded slider runs away
+(slipchain.analysis.traces): exact on polynomials, converging to the analytic maximum of identical
+contacts as the ramp slows, and the CLI that draws and tables it."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from slipchain import make_config, run
+from slipchain.analysis.traces import last_crossing, onset_summary, runaway_onset, window_velocity
+from slipchain.sweeps.definition import make_sweep
+from slipchain.workflows.dead_weight import single_contact_maximum
+
+# Identical contacts on every block (tests/physics/test_mu_max.py): the analytic maximum f_max of eq. (1)
+IDENTICAL = dict(N=11, theta=1.0, delta=0.0, start="rest")
+
+
+def test_window_velocity_is_the_mean_velocity_over_each_window():
+    t = np.arange(1, 1001) * 1e-3
+    x = 0.3 + 2e-4 * t + 5e-3 * t**2 - 1e-3 * t**3
+    tm, v = window_velocity(t, x, 0.02)  # 20 samples a window, windows every 10
+    assert tm.size == (t.size - 20 - 1) // 10 + 1 and np.allclose(np.diff(tm), 0.01)
+    a, b = tm - 0.01, tm + 0.01  # the mean of dx/dt over [a, b] is (x(b) - x(a)) / (b - a), cubic included
+    exact = (2e-4 * (b - a) + 5e-3 * (b**2 - a**2) - 1e-3 * (b**3 - a**3)) / (b - a)
+    assert np.allclose(v, exact, rtol=0, atol=1e-12)  # round-off of x ~ 0.3 over 0.02 s
+    assert window_velocity(t, x, 1e-9)[1].size == t.size - 1  # at least one sample a window
+    assert window_velocity(t[:1], x[:1], 0.02)[0].size == 0
+
+
+def test_the_onset_is_the_last_upward_crossing():
+    t = np.arange(0, 101) * 1e-3
+    v = np.full(100, 1e-4)
+    v[5:8] = 5.0  # an early overshoot above the threshold (the release), then back on the branch
+    v[60:] = np.geomspace(1e-3, 10, 40)  # the runaway
+    x = np.concatenate([[0.0], np.cumsum(v * 1e-3)])
+    i = 60 + np.nonzero(v[60:] > 2e-3)[0][0]  # the runaway's first interval above 2e-3 m/s (not the overshoot's)
+    assert last_crossing(t, x, 2e-3) == pytest.approx(t[i + 1])
+    assert np.isnan(last_crossing(t, x, 20.0))  # never above at the end
+    cfg = make_config(**IDENTICAL, dead_weight=1.2, t_ramp=0.2, t_total=0.3)  # v0 10**delta = 1e-3
+    on = runaway_onset(cfg, t, x)
+    k = 60 + np.nonzero(v[60:] > 3e-3)[0][0]
+    assert on["t_onset"] == pytest.approx(t[k + 1]) and on["mu_onset"] == pytest.approx(1.2 * t[k + 1] / 0.2)
+    assert on["during_ramp"] and on["resolution"] == pytest.approx(1.2 * 1e-3 / 0.2)
+    assert on["mu_onset_10"] > on["mu_onset"]
+    at_once = runaway_onset(cfg.with_updates(t_ramp=1e-3), t, x)  # the weight at once: nothing to read
+    assert np.isnan(at_once["mu_onset"]) and not at_once["during_ramp"]
+
+
+def test_the_onset_converges_to_the_analytic_maximum_as_the_ramp_slows():
+    """Identical contacts loaded over 10 and 40 ms, 4000 samples a ramp: the weight at the onset is
+    within 1e-3 of eq. (1)'s maximum and within one sample's rise (3e-4) at the slower ramp."""
+    f_max, _ = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
+    errors = []
+    for tr in (0.01, 0.04):
+        cfg = make_config(**IDENTICAL, dead_weight=1.2 * f_max, t_ramp=tr, t_total=1.3 * tr, output_interval=tr / 4000)
+        ds = run(cfg)
+        assert ds.attrs["velocity_status"] == "runaway"
+        on = runaway_onset(cfg, ds["time"].values, ds["X_mean"].values)
+        assert on["during_ramp"] and on["resolution"] == pytest.approx(1.2 * f_max / 4000)
+        errors.append(on["mu_onset"] - f_max)
+    assert abs(errors[0]) < 1e-3 and abs(errors[1]) <= 1.2 * f_max / 4000
+
+
+def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():
+    rows = []
+    for theta, mus in ((0.1, (0.90, 0.92)), (1.0, (0.95, 0.97))):
+        for seed, mu in enumerate(mus):
+            rows.append({"N": 16, "temperature": 20.0, "t_ramp": 6.0, "theta": theta, "seed": seed, "mu_onset": mu,
+                         "mu_onset_10": mu + 0.01, "during_ramp": True, "resolution": 2e-4})
+    rows.append({**rows[0], "mu_onset": 0.5, "during_ramp": False})  # onset after the ramp: an upper bound only
+    s = onset_summary(pd.DataFrame(rows)).set_index("theta")
+    assert s.loc[0.1, "mu_max"] == pytest.approx(0.91) and s.loc[1.0, "mu_max"] == pytest.approx(0.96)
+    assert s.loc[0.1, "mu_max_se"] == pytest.approx(0.01) and s.loc[1.0, "runs"] == 2
+    assert s.loc[1.0, "R"] == pytest.approx(0.96 / 0.91) and s.loc[0.1, "R"] == 1.0
+    assert s.loc[1.0, "R_se"] == pytest.approx(0.96 / 0.91 * np.hypot(0.01 / 0.96, 0.01 / 0.91))
+    assert s.loc[1.0, "R_10"] == pytest.approx(0.97 / 0.92)
+
+
+def test_cli_traces_draws_and_tables_a_store(tmp_path, slipchain_cli, store_of_runs):
+    f_max, _ = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
+    sweep = make_sweep({"name": "ramp", "base": {**IDENTICAL, "t_ramp": 0.01, "t_total": 0.013, "output_interval": 2.5e-6,
+                                 "dead_weight": 1.0},
+                        "grid": {"dead_weight": [0.9 * f_max, 1.2 * f_max]}})
+    st = store_of_runs(tmp_path / "s", sweep)
+    r = slipchain_cli("figure", "traces", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o"), "--window", "1e-4")
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "o" / "velocity_traces.png").stat().st_size > 5000
+    onsets = pd.read_csv(tmp_path / "o" / "onsets.csv").set_index("mu_a")
+    for m in sweep.members:  # each row is its member's own record read again
+        ds = st.read_member(m)
+        own = runaway_onset(m.config, ds["time"].values, ds["X_mean"].values)
+        got = onsets.iloc[int(np.argmin(abs(onsets.index - m.config.dead_weight)))]
+        assert got["status"] == ds.attrs["velocity_status"]
+        assert (np.isnan(own["mu_onset"]) and np.isnan(got["mu_onset"])) or got["mu_onset"] == pytest.approx(own["mu_onset"], rel=1e-5)
+    assert onsets["status"].tolist() == ["ok", "runaway"] and abs(onsets["mu_onset"].iloc[1] - f_max) < 1e-3
+    traces = pd.read_csv(tmp_path / "o" / "traces.csv")
+    assert set(traces["member_id"]) == {m.id for m in sweep.members} and "theta = 1:" in r.stdout.replace("\n", " ")
+    for bad, says in ((["--store", str(tmp_path / "none")], "not a slipchain sweep store"),
+                      (["--store", str(tmp_path / "s"), "--window", "0"], "--window")):
+        b = slipchain_cli("figure", "traces", *bad, "--out", str(tmp_path / "o2"))
+        assert b.returncode == 2 and says in b.stderr and not (tmp_path / "o2").exists(), b.stderr
