@@ -81,6 +81,8 @@ CATALOGUE: dict[str, Study] = {
                                 "the ladder's rubber rung as a grid of weights on a 16 x 16 slab"),
     "tester-16": Study("study", 16, "405 s on 16 CPUs", "docs/tester-3d/index.md",
                        "the tester's protocol on a 16 x 16 interface: rubber, H = 50 a, its top, the weight at once"),
+    "tester-16-12s": Study("study", 2, "not yet measured", "docs/tester-3d/index.md",
+                           "tester-16-slower's runaway at theta 0.05 and 1 with a 12-s ramp: is 6 s the slow limit?"),
     "tester-16-long": Study("study", 8, "not yet measured", "docs/tester-3d/index.md",
                             "tester-16's release at once, decided from 2 s (runs of 3 s): each load's undecided gap"),
     "tester-16-low": Study("study", 4, "22 min", "docs/tester-3d/index.md",
