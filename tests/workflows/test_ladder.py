@@ -44,6 +44,10 @@ def test_a_table_gives_the_ratio_of_its_extreme_loads_with_the_propagated_error(
     # geometry column, and a rung that chose only v_d averaged the slab with the 2-D chains)
     with pytest.raises(ConfigError, match=r"one row per theta \(rows at theta = 0.05 differ in v_d"):
         effect_of_table(tmp_path / "t.csv", {})
+    # the onsets' mu_max.csv (`slipchain figure traces`): mu_max and its SE per load, chosen by interface and ramp
+    t.rename(columns={"v_d": "N", "mu": "mu_max", "err": "mu_max_se"}).assign(t_ramp=6.0).to_csv(tmp_path / "m.csv", index=False)
+    e = effect_of_table(tmp_path / "m.csv", {"N": 1e-3, "t_ramp": 6.0})
+    assert (e.low, e.high, e.ratio) == (0.9, 0.72, pytest.approx(0.8)) and e.ratio_se == pytest.approx(0.8 * math.hypot(0.01, 0.01))
 
 
 def _mu_max_output(path: Path) -> None:

@@ -9,8 +9,9 @@ and pull). A rung names its observable and where its numbers are; nothing is typ
 - ``kind = "mu-max"``: the output directory of ``slipchain mu-max`` (its ``mu_max.csv``): the
   friction maximum under a dead weight, mu_max, at the smallest and the largest load of its plan;
 - ``kind = "table"``: a CSV with a ``theta`` column and either ``mu`` and ``err`` (a figure's
-  table) or one ``mu_star`` per member (a sweep's index: seed means, SE = std/sqrt(n)), rows chosen
-  by ``where`` (column = value): mu_star at the smallest and the largest theta;
+  table; ``mu_max`` and ``mu_max_se`` alike: the runaway onsets' ``mu_max.csv`` of ``slipchain figure
+  traces``) or one ``mu_star`` per member (a sweep's index: seed means, SE = std/sqrt(n)), rows chosen
+  by ``where`` (column = value): the observable at the smallest and the largest theta;
 - ``kind = "evaluations"``: a CSV of dead-weight runs (theta, mu_a, velocity_status: a mu-max
   ``evaluations.csv``, or :func:`~slipchain.workflows.dead_weight.store_evaluations` of a sweep
   over ``dead_weight``; rows chosen by ``where`` as a table's): the bounds on mu_max that its runs
@@ -222,6 +223,8 @@ def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
     import pandas as pd
 
     d = _select(pd.read_csv(path), where, path)
+    if "mu_max" in d.columns and "mu" not in d.columns:  # `slipchain figure traces`' mu_max.csv: the same shape
+        d = d.rename(columns={"mu_max": "mu", "mu_max_se": "err"})
     if "mu" in d.columns:
         # a figure's table has one row per point: several at one theta are points of another dimension
         # (a geometry, a size), which ``where`` must choose, never averaged
