@@ -65,7 +65,7 @@ def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():
     rows = []
     for theta, mus in ((0.1, (0.90, 0.92)), (1.0, (0.95, 0.97))):
         for seed, mu in enumerate(mus):
-            rows.append({"N": 16, "temperature": 20.0, "t_ramp": 6.0, "theta": theta, "seed": seed, "mu_onset": mu,
+            rows.append({"N": 16, "temperature": 20.0, "rate": 0.175, "theta": theta, "seed": seed, "mu_onset": mu,
                          "mu_onset_10": mu + 0.01, "during_ramp": True, "resolution": 2e-4})
     rows.append({**rows[0], "mu_onset": 0.5, "during_ramp": False})  # onset after the ramp: an upper bound only
     s = onset_summary(pd.DataFrame(rows)).set_index("theta")
@@ -74,6 +74,11 @@ def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():
     assert s.loc[1.0, "R"] == pytest.approx(0.96 / 0.91) and s.loc[0.1, "R"] == 1.0
     assert s.loc[1.0, "R_se"] == pytest.approx(0.96 / 0.91 * np.hypot(0.01 / 0.96, 0.01 / 0.91))
     assert s.loc[1.0, "R_10"] == pytest.approx(0.97 / 0.92)
+    # the rate groups the runs: 1.05 over 6 s and 1.015 over 5.8 s are one rate, 1.0 over 6 s another
+    from slipchain.analysis.traces import loading_rate
+    cfg = make_config(**IDENTICAL, dead_weight=1.05, t_ramp=6.0, t_total=7.0)
+    assert loading_rate(cfg) == loading_rate(cfg.with_updates(dead_weight=1.015, t_ramp=5.8)) == 0.175
+    assert loading_rate(cfg.with_updates(dead_weight=1.0)) == pytest.approx(1 / 6, rel=1e-3)
 
 
 def test_cli_traces_draws_and_tables_a_store(tmp_path, slipchain_cli, store_of_runs):

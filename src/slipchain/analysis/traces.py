@@ -88,7 +88,17 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray) -> dict:
             "resolution": cfg.dead_weight * interval / ramp}
 
 
-KEYS = ("N", "temperature", "t_ramp", "theta")  # what distinguishes a group of runs in onset_summary
+KEYS = ("N", "temperature", "rate", "theta")  # what distinguishes a group of runs in onset_summary
+
+
+def loading_rate(cfg) -> float:
+    """The weight's rise per second during the ramp, mu_a / t_ramp, to 4 significant digits (so that
+    1.05 over 6 s and 1.015 over 5.8 s are one rate: the onset depends on the rate, not on where the
+    ramp ends); NaN without a ramp."""
+    from ..model.system import dead_weight_ramp_time
+
+    ramp = dead_weight_ramp_time(cfg)
+    return float(f"{cfg.dead_weight / ramp:.4g}") if ramp and cfg.dead_weight else float("nan")
 
 
 def _runs(stores: list[str | os.PathLike]):
@@ -116,7 +126,8 @@ def _runs(stores: list[str | os.PathLike]):
 
 def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Every completed run of dead-weight sweep stores: its windowed velocities (:func:`window_velocity`;
-    columns store, member_id, N, temperature, theta, seed, mu_a, t_ramp, t_decide, status (the tester's
+    columns store, member_id, N, temperature, theta, seed, mu_a, t_ramp, rate (:func:`loading_rate`),
+    t_decide, status (the tester's
     classification the run recorded), t (s), v (m/s)) and its runaway onset (:func:`runaway_onset`; one
     row per run, the same identifying columns). SweepError naming the store for one that is not a store,
     holds no completed run, or holds runs without a dead weight; ValueError for a window that is not a
@@ -126,7 +137,8 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
     traces, onsets = [], []
     for store, mid, cfg, ds in _runs(stores):
         who = {"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "theta": cfg.theta,
-               "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": cfg.t_ramp, "t_decide": cfg.t_decide,
+               "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": cfg.t_ramp, "rate": loading_rate(cfg),
+               "t_decide": cfg.t_decide,
                "status": ds.attrs.get("velocity_status", "")}
         time, x = ds["time"].values, ds["X_mean"].values
         t, v = window_velocity(time, x, window)
@@ -136,11 +148,11 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
 
 
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
-    """mu_max per group of runs (:data:`KEYS`: interface, temperature, ramp, load) from the onsets read
+    """mu_max per group of runs (:data:`KEYS`: interface, temperature, loading rate, load) from the onsets read
     during the ramp: the mean over runs (seeds; a seed with several weights counts once, its mean), its
     standard error (the seeds' scatter; NaN for one), the mean read at the check threshold
     (``mu_max_10``), and R = the group's mean over the smallest load's at the same interface, temperature
-    and ramp, with its standard error (independent errors), and ``R_10`` the same at the check threshold
+    and rate, with its standard error (independent errors), and ``R_10`` the same at the check threshold
     (how much R depends on where the onset is read)."""
     ok = onsets[onsets["during_ramp"].astype(bool)]
     per_seed = ok.groupby([*KEYS, "seed"], dropna=False).agg(mu=("mu_onset", "mean"), mu_10=("mu_onset_10", "mean"),
@@ -154,7 +166,7 @@ def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
     table = pd.DataFrame(rows, columns=[*KEYS, "runs", "mu_max", "mu_max_se", "mu_max_10", "resolution"])
     ratio = pd.Series(np.nan, index=table.index)
     ratio_se, ratio_10 = ratio.copy(), ratio.copy()
-    for _, same in table.groupby(["N", "temperature", "t_ramp"], dropna=False):  # elastic runs: temperature NaN
+    for _, same in table.groupby(["N", "temperature", "rate"], dropna=False):  # elastic runs: temperature NaN
         low = same.loc[same["theta"].idxmin()]
         q = same["mu_max"] / low["mu_max"]
         ratio[same.index] = q
@@ -165,4 +177,4 @@ def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
 
 
 __all__ = ["KEYS", "ONSET_CHECK", "ONSET_FACTOR", "last_crossing", "onset_summary", "runaway_onset", "velocity_traces",
-           "window_velocity"]
+           "loading_rate", "window_velocity"]

@@ -150,7 +150,7 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
     for _, r in summary.iterrows():
         se = f" ± {r['mu_max_se']:.4f}" if np.isfinite(r["mu_max_se"]) else ""
         rse = f" ± {r['R_se']:.4f}" if np.isfinite(r["R_se"]) else ""
-        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C, ramp {r['t_ramp']:g} s, theta = {r['theta']:g}: mu_max "
+        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C, weight rising {r['rate']:g}/s, theta = {r['theta']:g}: mu_max "
                      f"{r['mu_max']:.4f}{se} ({int(r['runs'])} run(s); read at 10 v0 10**delta {r['mu_max_10']:.4f}); "
                      f"R = {r['R']:.4f}{rse} ({r['R_10']:.4f})")
     return paths, lines
