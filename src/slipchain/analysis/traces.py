@@ -81,9 +81,11 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray) -> dict:
         return out
     scale = cfg.v0 * 10.0 ** cfg.delta
     t_on, t_10 = (last_crossing(time, x, k * scale) for k in (ONSET_FACTOR, ONSET_CHECK))
-    weight = lambda t: cfg.dead_weight * min(t / ramp, 1.0)  # noqa: E731
-    return {"mu_onset": weight(t_on) if np.isfinite(t_on) else nan,
-            "mu_onset_10": weight(t_10) if np.isfinite(t_10) else nan,
+
+    def weight(t: float) -> float:
+        return cfg.dead_weight * min(t / ramp, 1.0) if np.isfinite(t) else nan
+
+    return {"mu_onset": weight(t_on), "mu_onset_10": weight(t_10),
             "t_onset": t_on, "during_ramp": bool(np.isfinite(t_on) and t_on <= ramp),
             "resolution": cfg.dead_weight * interval / ramp}
 
@@ -127,8 +129,7 @@ def _runs(stores: list[str | os.PathLike]):
 def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Every completed run of dead-weight sweep stores: its windowed velocities (:func:`window_velocity`;
     columns store, member_id, N, temperature, theta, seed, mu_a, t_ramp, rate (:func:`loading_rate`),
-    t_decide, status (the tester's
-    classification the run recorded), t (s), v (m/s)) and its runaway onset (:func:`runaway_onset`; one
+    t_decide, status (the tester's classification the run recorded), t (s), v (m/s)) and its runaway onset (:func:`runaway_onset`; one
     row per run, the same identifying columns). SweepError naming the store for one that is not a store,
     holds no completed run, or holds runs without a dead weight; ValueError for a window that is not a
     positive number of seconds."""
@@ -138,8 +139,7 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
     for store, mid, cfg, ds in _runs(stores):
         who = {"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "theta": cfg.theta,
                "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": cfg.t_ramp, "rate": loading_rate(cfg),
-               "t_decide": cfg.t_decide,
-               "status": ds.attrs.get("velocity_status", "")}
+               "t_decide": cfg.t_decide, "status": ds.attrs.get("velocity_status", "")}
         time, x = ds["time"].values, ds["X_mean"].values
         t, v = window_velocity(time, x, window)
         traces.append(pd.DataFrame({**who, "t": t, "v": v}))
@@ -148,8 +148,8 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
 
 
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
-    """mu_max per group of runs (:data:`KEYS`: interface, temperature, loading rate, load) from the onsets read
-    during the ramp: the mean over runs (seeds; a seed with several weights counts once, its mean), its
+    """mu_max per group of runs (:data:`KEYS`: interface, temperature, loading rate, load) from the onsets
+    read during the ramp: the mean over runs (seeds; a seed with several weights counts once, its mean), its
     standard error (the seeds' scatter; NaN for one), the mean read at the check threshold
     (``mu_max_10``), and R = the group's mean over the smallest load's at the same interface, temperature
     and rate, with its standard error (independent errors), and ``R_10`` the same at the check threshold

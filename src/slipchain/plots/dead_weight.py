@@ -144,7 +144,6 @@ def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Pat
     return paths
 
 
-
 STATUS_STYLE = {"ok": "-", "runaway": "--", "no-steady": ":"}  # the tester's classification, by line style
 
 
@@ -163,7 +162,7 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     colors = dict(zip(weights, cmap))
     for ax, th in zip(axes[0], thetas):
         cur = traces[np.isclose(traces["theta"], th)]
-        for (mu_a, seed, _), g in cur.groupby(["mu_a", "seed", "member_id"]):
+        for (mu_a, _seed, _id), g in cur.groupby(["mu_a", "seed", "member_id"]):
             status = str(g["status"].iloc[0])
             ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE.get(status, "-."), lw=1.0)
         on = onsets[np.isclose(onsets["theta"], th) & onsets["during_ramp"].astype(bool)]
@@ -191,5 +190,6 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
                frameon=False)
     fig.suptitle("The hanging weight's pull read as a tester's distance record: velocity against time", fontsize=10)
     return save_figure(fig, out, "velocity_traces")
+
 
 __all__ = ["STATUS_STYLE", "plot_velocity_traces", "plot_fit", "plot_mu_max", "spring_drive_maxima"]
