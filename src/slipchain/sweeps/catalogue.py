@@ -107,6 +107,8 @@ CATALOGUE: dict[str, Study] = {
                                "tester-32-slower on the issue's 128 x 128 interface (seed 0)"),
     "tester-onset-32-seeds": Study("study", 8, "not yet measured", "docs/tester-3d/index.md",
                                    "mu_max at the runaway's onset on 32 x 32, seeds 1 and 2, every load"),
+    "tester-onset-128": Study("study", 4, "not yet measured (est. 1.5-2 h at theta = 1 on one core, hours more at 0.05)",
+                              "docs/tester-3d/index.md", "mu_max at the runaway's onset on 128 x 128, every load (seed 0)"),
     "tester-onset-64": Study("study", 4, "not yet measured", "docs/tester-3d/index.md",
                              "mu_max at the runaway's onset on 64 x 64, every load (seed 0)"),
     "tester-16-11c": Study("study", 15, "about 420 s on 16 CPUs", "docs/tester-3d/index.md",
