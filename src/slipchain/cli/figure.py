@@ -213,7 +213,7 @@ def ladder(
     out_dir: OutOpt,
 ) -> None:
     """The ladder of issue 29: the load effect at each realism step, one table (ladder.csv) and one figure."""
-    from ..workflows.ladder import ladder_figure, ladder_table
+    from ..workflows.ladder import format_with_se, ladder_figure, ladder_table
 
     if not ladder_file.is_file():
         fail(f"--ladder {str(ladder_file)!r}: no such file; expected a ladder TOML file")
@@ -223,5 +223,5 @@ def ladder(
         fail(str(e))
     wrote(ladder_figure(table, out_dir))
     for _, r in table.iterrows():
-        value = f"R = {r['ratio']:.3f} ± {r['ratio_se']:.3f}" if r["ratio"] == r["ratio"] else (r["bounds"] or r["note"])
+        value = f"R = {format_with_se(r['ratio'], r['ratio_se'])}" if r["ratio"] == r["ratio"] else (r["bounds"] or r["note"])
         out.print(f"{r['rung']}: {value}")

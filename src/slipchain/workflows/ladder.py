@@ -241,8 +241,13 @@ def effect_of_table(path: Path, where: dict[str, Any]) -> Effect:
         g = pd.DataFrame({"mu": g["mean"], "err": g["std"] / np.sqrt(g["count"])})
     lo, hi = g.index.min(), g.index.max()
     e = Effect(float(lo), float(hi), float(g.loc[lo, "mu"]), float(g.loc[lo, "err"]), float(g.loc[hi, "mu"]),
-               float(g.loc[hi, "err"]), per_load="; ".join(f"{t:g}: {r.mu:.3f} ± {r.err:.3f}" for t, r in g.iterrows()))
+               float(g.loc[hi, "err"]), per_load="; ".join(f"{t:g}: {format_with_se(r.mu, r.err)}" for t, r in g.iterrows()))
     return _ratio(e)
+
+
+def format_with_se(value: float, se: float) -> str:
+    """``value ± se`` to three decimals; the value alone where there is no standard error (one realisation)."""
+    return f"{value:.3f} ± {se:.3f}" if np.isfinite(se) else f"{value:.3f} (no SE: one realisation)"
 
 
 def ladder_table(path: str | os.PathLike) -> "pd.DataFrame":
@@ -288,7 +293,7 @@ def ladder_figure(table: "pd.DataFrame", out: str | os.PathLike) -> list[Path]:
         c = colours.get(r["observable"], "tab:red")
         if np.isfinite(r["ratio"]):
             ax.errorbar(r["ratio"], yi, xerr=r["ratio_se"], fmt="o", color=c, capsize=3)
-            ax.annotate(f"{r['ratio']:.3f} ± {r['ratio_se']:.3f}", (r["ratio"], yi), textcoords="offset points",
+            ax.annotate(format_with_se(r["ratio"], r["ratio_se"]), (r["ratio"], yi), textcoords="offset points",
                         xytext=(0, 7), ha="center", fontsize=7, color=c)
         elif (np.isfinite(r["ratio_min"]) and r["ratio_min"] > 0) or np.isfinite(r["ratio_max"]):  # a range from undecided loads
             a = r["ratio_min"] if np.isfinite(r["ratio_min"]) else 0.0
