@@ -85,6 +85,8 @@ CATALOGUE: dict[str, Study] = {
                            "the runaway at theta 0.05 and 1 with the weight raised half as fast: is 6 s the slow limit?"),
     "tester-16-long": Study("study", 8, "35 core-minutes (70-906 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                             "tester-16's release at once, decided from 2 s (runs of 3 s): each load's undecided gap"),
+    "tester-16-long-seeds": Study("study", 16, "not yet measured (tester-16-long: 35 core-minutes a seed)",
+                                  "docs/tester-3d/index.md", "tester-16-long's brackets for seeds 1 and 2"),
     "tester-16-low": Study("study", 4, "22 min", "docs/tester-3d/index.md",
                            "tester-16's lowest load at dt = 5e-8 s"),
     "tester-16-slow": Study("study", 25, "1 h 44 min", "docs/tester-3d/index.md",
