@@ -166,7 +166,8 @@ def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
     table = pd.DataFrame(rows, columns=[*KEYS, "runs", "mu_max", "mu_max_se", "mu_max_10", "resolution"])
     ratio = pd.Series(np.nan, index=table.index)
     ratio_se, ratio_10 = ratio.copy(), ratio.copy()
-    for _, same in table.groupby(["N", "temperature", "rate"], dropna=False):  # elastic runs: temperature NaN
+    # R compares the loads of one group: every key but theta (elastic runs: temperature NaN, hence dropna=False)
+    for _, same in table.groupby([k for k in KEYS if k != "theta"], dropna=False):
         low = same.loc[same["theta"].idxmin()]
         q = same["mu_max"] / low["mu_max"]
         ratio[same.index] = q
