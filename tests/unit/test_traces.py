@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 
 from slipchain import make_config, run
-from slipchain.analysis.traces import last_crossing, onset_summary, runaway_onset, window_velocity
+from slipchain.analysis.traces import (HELD_WINDOW, last_crossing, onset_summary, protocol_brackets, run_outcome,
+                                       runaway_onset, seed_brackets, window_velocity)
 from slipchain.sweeps.definition import make_sweep
 from slipchain.workflows.dead_weight import single_contact_maximum
 
@@ -61,6 +62,39 @@ def test_the_onset_converges_to_the_analytic_maximum_as_the_ramp_slows():
     assert abs(errors[0]) < 1e-3 and abs(errors[1]) <= 1.2 * f_max / 4000
 
 
+def test_a_run_back_on_the_rising_branch_by_its_end_is_held():
+    """The release's outcomes: a record that decelerates from the overshoot to below 3 v0 10**delta
+    (here 3e-3 m/s) is held, its end velocity the exact mean over the last HELD_WINDOW; cut while still
+    fast it is undecided; the tester's steady and runaway stand as they are."""
+    cfg = make_config(**IDENTICAL, dead_weight=0.8, t_total=3.0)  # v0 10**delta = 1e-3 m/s
+    t = np.arange(0, 3001) * 1e-3
+    x = 0.02 * 0.3 * (1 - np.exp(-t / 0.3)) + 1e-5 * t  # v = 0.02 exp(-t/0.3) + 1e-5: overshoot, then creep
+    outcome, v_end = run_outcome(cfg, "no-steady", t, x)
+    j = t.size - 1 - int(round(HELD_WINDOW / 1e-3))
+    assert outcome == "held" and v_end == pytest.approx((x[-1] - x[j]) / (t[-1] - t[j]), rel=1e-12)
+    assert v_end == pytest.approx(0.02 * 0.3 * (np.exp(-2.8 / 0.3) - np.exp(-10.0)) / 0.2 + 1e-5, rel=1e-6)
+    early = t <= 0.3  # still at 0.02 exp(-1) ~ 7e-3 m/s over its last 0.2 s: above the branch
+    assert run_outcome(cfg, "no-steady", t[early], x[early])[0] == "undecided"
+    assert run_outcome(cfg, "ok", t, x)[0] == "steady" and run_outcome(cfg, "runaway", t, x)[0] == "runaway"
+    short = t <= 0.05  # shorter than the window: the whole record's mean velocity
+    assert run_outcome(cfg, "no-steady", t[short], x[short])[1] == pytest.approx(x[50] / t[50], rel=1e-12)
+
+
+def test_the_brackets_are_seed_by_seed_and_their_envelope():
+    rows = [(0.5, 0, 0.6, "held"), (0.5, 0, 0.7, "runaway"), (0.5, 0, 0.8, "runaway"), (0.5, 1, 0.6, "steady"),
+            (0.5, 1, 0.65, "undecided"), (0.5, 1, 0.75, "runaway"), (1.0, 0, 0.8, "held"), (1.0, 0, 0.75, "runaway"),
+            (1.0, 1, 0.75, "held")]
+    runs = pd.DataFrame([{"N": 16, "temperature": 20.0, "t_ramp": 1e-3, "theta": th, "seed": sd, "mu_a": m, "outcome": o}
+                         for th, sd, m, o in rows])
+    per_seed = seed_brackets(runs, ["theta"]).set_index(["theta", "seed"])
+    assert per_seed.loc[(0.5, 0), ["lo", "hi"]].tolist() == [0.6, 0.7]
+    assert per_seed.loc[(0.5, 1), ["lo", "hi"]].tolist() == [0.6, 0.75]  # the undecided 0.65 bounds nothing
+    assert per_seed.loc[(1.0, 1), "hi"] == np.inf and not per_seed.loc[(1.0, 0), "consistent"]  # held above a runaway
+    b = protocol_brackets(runs).set_index("theta")
+    assert b.loc[0.5, ["lo", "hi", "seeds", "runs", "inconsistent"]].tolist() == [0.6, 0.75, 2, 6, 0]
+    assert b.loc[1.0, "inconsistent"] == 1 and b.loc[0.5, "per_seed"] == "seed 0: [0.6, 0.7); seed 1: [0.6, 0.75)"
+
+
 def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():
     rows = []
     for theta, mus in ((0.1, (0.90, 0.92)), (1.0, (0.95, 0.97))):
@@ -98,6 +132,10 @@ def test_cli_traces_draws_and_tables_a_store(tmp_path, slipchain_cli, store_of_r
         assert got["status"] == ds.attrs["velocity_status"]
         assert (np.isnan(own["mu_onset"]) and np.isnan(got["mu_onset"])) or got["mu_onset"] == pytest.approx(own["mu_onset"], rel=1e-5)
     assert onsets["status"].tolist() == ["ok", "runaway"] and abs(onsets["mu_onset"].iloc[1] - f_max) < 1e-3
+    assert onsets["outcome"].tolist() == ["steady", "runaway"]
+    b = pd.read_csv(tmp_path / "o" / "brackets.csv")  # the two weights bracket eq. (1)'s maximum
+    assert b[["lo", "hi", "seeds", "runs"]].values.tolist() == [[pytest.approx(0.9 * f_max, rel=1e-5), pytest.approx(1.2 * f_max, rel=1e-5), 1, 2]]
+    assert "mu_max in [" in r.stdout
     traces = pd.read_csv(tmp_path / "o" / "traces.csv")
     assert set(traces["member_id"]) == {m.id for m in sweep.members} and "theta = 1:" in r.stdout.replace("\n", " ")
     for bad, says in ((["--store", str(tmp_path / "none")], "not a slipchain sweep store"),

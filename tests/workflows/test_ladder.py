@@ -150,6 +150,33 @@ def test_an_evaluations_rung_reads_several_csvs_as_one(tmp_path):
         load_ladder(ladder)
 
 
+def test_runs_with_an_outcome_count_held_weights_as_lower_bounds(tmp_path):
+    """`slipchain figure traces`' onsets.csv (the tester's release: an outcome per run) as an evaluations
+    rung: a held run bounds mu_max from below as a steady one does, an undecided one bounds nothing; the
+    same runs read by the tester's status alone leave the held weights undecided."""
+    rows = [(0.05, 0.85, "no-steady", "held"), (0.05, 0.9, "runaway", "runaway"), (0.5, 0.6, "no-steady", "held"),
+            (0.5, 0.7, "runaway", "runaway"), (1.0, 0.75, "no-steady", "held"), (1.0, 0.8, "no-steady", "undecided"),
+            (1.0, 0.85, "runaway", "runaway")]
+    d = pd.DataFrame([{"N": 16, "theta": th, "seed": 0, "mu_a": m, "velocity_status": st, "outcome": o}
+                      for th, m, st, o in rows])
+    d.to_csv(tmp_path / "o.csv", index=False)
+    e = effect_of_evaluations(tmp_path / "o.csv", {"N": 16})
+    assert e.per_load == ("0.05: held up to mu_a = 0.85, runaway from mu_a = 0.9; 0.5: held up to mu_a = 0.6, runaway "
+                          "from mu_a = 0.7; 1: held up to mu_a = 0.75, runaway from mu_a = 0.85, undecided at mu_a = 0.8")
+    # theta = 1 in [0.75, 0.85), theta = 0.05 in [0.85, 0.9): R in [0.75/0.9, 0.85/0.85]
+    assert (e.ratio_min, e.ratio_max) == (pytest.approx(0.75 / 0.9), pytest.approx(1.0))
+    d.drop(columns="outcome").to_csv(tmp_path / "s.csv", index=False)
+    s = effect_of_evaluations(tmp_path / "s.csv")
+    assert s.per_load.startswith("0.05: runaway from mu_a = 0.9, no-steady at mu_a = 0.85") and s.ratio_min == pytest.approx(0.0)
+    # beside a table of the tester's status alone (shorter runs: no outcome), its runs count as they are
+    pd.DataFrame([{"theta": 1.0, "seed": 0, "mu_a": 0.8, "velocity_status": "runaway"},
+                  {"theta": 0.05, "seed": 0, "mu_a": 0.88, "velocity_status": "no-steady"}]).to_csv(tmp_path / "t.csv", index=False)
+    d.drop(columns="velocity_status").to_csv(tmp_path / "o2.csv", index=False)
+    m = effect_of_evaluations([tmp_path / "o2.csv", tmp_path / "t.csv"])
+    assert m.per_load.startswith("0.05: held up to mu_a = 0.85, runaway from mu_a = 0.9, undecided at mu_a = 0.88")
+    assert (m.ratio_min, m.ratio_max) == (pytest.approx(0.75 / 0.9), pytest.approx(0.8 / 0.85))
+
+
 def test_a_bad_ladder_file_names_the_rung_key_and_value(tmp_path, slipchain_cli):
     bad = tmp_path / "l.toml"
     bad.write_text('[[rung]]\nname = "a"\nadds = "b"\nobservable = "mu_max"\nkind = "guess"\nsource = "x"\n')

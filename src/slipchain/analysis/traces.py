@@ -20,6 +20,17 @@ ramp of 40 ms); ``mu_onset_10`` (k = 10) beside it says how much the choice of k
 keeps rising while the slider accelerates, and a faster ramp lets the slider lag behind the branch,
 so the estimate depends on the ramp's rate: compare loads at one ramp, and ramps with each other, to
 find the slow-loading limit.
+
+**Held, under the tester's release** (:func:`run_outcome`, :func:`seed_brackets`). With the weight at once
+the heavy top overshoots onto fast sliding and then either runs away or comes back onto the rising
+branch, where it creeps ever more slowly and rings: the tester's velocity algorithm calls such a run
+"no steady sliding" for seconds. A run is **held** when it did not run away (its recorded status is not
+``runaway``) and its mean velocity over the last :data:`HELD_WINDOW` s of the record is below
+``ONSET_FACTOR v0 10**delta`` (the rising branch's velocities, as for the onset): the weight did not pull
+the block away within the run, which is what a tester reads as "below the maximum". A run that is neither
+steady, runaway nor held (still sliding fast when the record ends, e.g. decelerating from the overshoot)
+is ``undecided``. So every load's mu_max under a protocol lies in [the largest steady or held weight,
+the smallest runaway one) per seed: a bound for runs of that length, as a tester's own runs give.
 """
 
 from __future__ import annotations
@@ -32,6 +43,8 @@ import pandas as pd
 
 ONSET_FACTOR = 3.0  # the runaway's onset: the velocity passes ONSET_FACTOR v0 10**delta for the last time
 ONSET_CHECK = 10.0  # ...and, for comparison, this multiple
+HELD_WINDOW = 0.2  # s: the last stretch of a record whose mean velocity says held (about one ring of the tester's top)
+OUTCOMES = ("steady", "held", "runaway", "undecided")  # run_outcome's values; the first two bound mu_max from below
 
 
 def window_velocity(time: np.ndarray, x: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +103,42 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray) -> dict:
             "resolution": cfg.dead_weight * interval / ramp}
 
 
+def run_outcome(cfg, status: str, time: np.ndarray, x: np.ndarray) -> tuple[str, float]:
+    """What one dead-weight run says about mu_max (module docstring): ``"steady"`` (the tester's status
+    ``ok``), ``"runaway"``, ``"held"`` (neither, and its mean velocity over the last :data:`HELD_WINDOW` s,
+    or the whole record if shorter, below ``ONSET_FACTOR v0 10**delta``) or ``"undecided"``; and that
+    end velocity (m/s)."""
+    time, x = np.asarray(time, float), np.asarray(x, float)
+    if time.size < 2:
+        return ("steady" if status == "ok" else "runaway" if status == "runaway" else "undecided"), float("nan")
+    n = max(int(round(HELD_WINDOW / float(np.median(np.diff(time))))), 1)  # the window in whole samples
+    j = max(time.size - 1 - n, 0)
+    v_end = float((x[-1] - x[j]) / (time[-1] - time[j]))
+    if status == "ok":
+        return "steady", v_end
+    if status == "runaway":
+        return "runaway", v_end
+    return ("held" if v_end < ONSET_FACTOR * cfg.v0 * 10.0 ** cfg.delta else "undecided"), v_end
+
+
+def seed_brackets(runs: pd.DataFrame, by: list[str] | tuple[str, ...] = (), status: str = "outcome",
+                  lower: tuple[str, ...] = ("steady", "held"), upper: tuple[str, ...] = ("runaway",)) -> pd.DataFrame:
+    """The bracket on mu_max that each seed's runs give, per group ``by`` (e.g. interface, temperature,
+    ramp, load): ``lo`` the largest weight ``mu_a`` whose ``status`` is in ``lower`` (0 if none), ``hi``
+    the smallest in ``upper`` (inf if none), ``runs`` how many runs, and ``consistent`` (lo < hi: a held
+    or steady weight above a runaway one refutes the bracket)."""
+    keys = [*by, "seed"] if "seed" in runs.columns else list(by)
+    rows = []
+    for key, g in (runs.groupby(keys, dropna=False) if keys else [((), runs)]):
+        key = key if isinstance(key, tuple) else (key,)
+        lo = g[g[status].isin(lower)]["mu_a"]
+        hi = g[g[status].isin(upper)]["mu_a"]
+        lo, hi = (float(lo.max()) if len(lo) else 0.0), (float(hi.min()) if len(hi) else np.inf)
+        rows.append({**dict(zip(keys, key)), "lo": lo, "hi": hi, "runs": len(g), "consistent": lo < hi})
+    return pd.DataFrame(rows, columns=[*keys, "lo", "hi", "runs", "consistent"])
+
+
+BRACKET_KEYS = ("N", "temperature", "t_ramp", "theta")  # what distinguishes a protocol's group in the brackets
 KEYS = ("N", "temperature", "rate", "theta")  # what distinguishes a group of runs in onset_summary
 
 
@@ -129,8 +178,9 @@ def _runs(stores: list[str | os.PathLike]):
 def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Every completed run of dead-weight sweep stores: its windowed velocities (:func:`window_velocity`;
     columns store, member_id, N, temperature, theta, seed, mu_a, t_ramp, rate (:func:`loading_rate`),
-    t_decide, status (the tester's classification the run recorded), t (s), v (m/s)) and its runaway onset (:func:`runaway_onset`; one
-    row per run, the same identifying columns). SweepError naming the store for one that is not a store,
+    t_decide, status (the tester's classification the run recorded), t (s), v (m/s)) and, one row per run
+    with the same identifying columns, its outcome and end velocity (:func:`run_outcome`: ``outcome``,
+    ``v_end``) and its runaway onset (:func:`runaway_onset`). SweepError naming the store for one that is not a store,
     holds no completed run, or holds runs without a dead weight; ValueError for a window that is not a
     positive number of seconds."""
     if not (isinstance(window, (int, float)) and np.isfinite(window) and window > 0):
@@ -143,7 +193,8 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
         time, x = ds["time"].values, ds["X_mean"].values
         t, v = window_velocity(time, x, window)
         traces.append(pd.DataFrame({**who, "t": t, "v": v}))
-        onsets.append({**who, **runaway_onset(cfg, time, x)})
+        outcome, v_end = run_outcome(cfg, who["status"], time, x)
+        onsets.append({**who, "outcome": outcome, "v_end": v_end, **runaway_onset(cfg, time, x)})
     return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets)
 
 
@@ -177,5 +228,21 @@ def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
     return table.assign(R=ratio.to_numpy(), R_se=ratio_se.to_numpy(), R_10=ratio_10.to_numpy())
 
 
-__all__ = ["KEYS", "ONSET_CHECK", "ONSET_FACTOR", "last_crossing", "onset_summary", "runaway_onset", "velocity_traces",
-           "loading_rate", "window_velocity"]
+def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
+    """mu_max under each protocol from its runs' outcomes (:func:`run_outcome`): one row per interface,
+    temperature, ramp and load (:data:`BRACKET_KEYS`) with every seed's bracket (:func:`seed_brackets`),
+    their envelope [the smallest lo, the largest hi] (``lo``, ``hi``: where the seed mean of mu_max can
+    lie), the seeds, the runs, and how many seeds' runs are inconsistent (a held or steady weight at or
+    above a runaway one)."""
+    per_seed = seed_brackets(onsets, BRACKET_KEYS)
+    rows = []
+    for key, g in per_seed.groupby(list(BRACKET_KEYS), dropna=False):
+        rows.append({**dict(zip(BRACKET_KEYS, key)), "lo": g["lo"].min(), "hi": g["hi"].max(), "seeds": len(g),
+                     "runs": int(g["runs"].sum()), "inconsistent": int((~g["consistent"]).sum()),
+                     "per_seed": "; ".join(f"seed {int(r.seed)}: [{r.lo:g}, {r.hi:g})" for r in g.itertuples())})
+    return pd.DataFrame(rows, columns=[*BRACKET_KEYS, "lo", "hi", "seeds", "runs", "inconsistent", "per_seed"])
+
+
+__all__ = ["BRACKET_KEYS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR", "OUTCOMES", "last_crossing", "loading_rate",
+           "onset_summary", "protocol_brackets", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
+           "window_velocity"]

@@ -179,7 +179,7 @@ def traces(
     out_dir: OutOpt,
     window: Annotated[float, typer.Option("--window", help="Seconds over which each drawn velocity is the mean (the distance travelled over the window's length).")] = 0.02,
 ) -> None:
-    """The top's velocity against time per run, one panel per theta, and mu_max from where slowly loaded runs run away; traces.csv, onsets.csv, mu_max.csv."""
+    """The top's velocity against time per run, one panel per theta; mu_max from where slowly loaded runs run away, and each protocol's bracket from its steady, held and runaway weights; traces.csv, onsets.csv, mu_max.csv, brackets.csv."""
     if not window > 0:
         fail(f"--window {window!r}: expected a positive number of seconds (e.g. 0.02)")
     try:

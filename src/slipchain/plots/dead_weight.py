@@ -144,13 +144,13 @@ def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Pat
     return paths
 
 
-STATUS_STYLE = {"ok": "-", "runaway": "--", "no-steady": ":"}  # the tester's classification, by line style
+STATUS_STYLE = {"steady": "-", "runaway": "--", "held": ":", "undecided": "-."}  # a run's outcome, by line style
 
 
 def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: float, out: str | os.PathLike) -> list[Path]:
     """The top's velocity against time, one panel per theta, one line per run coloured by its applied
-    mu_a, styled by the tester's classification (solid steady, dashed runaway, dotted no steady
-    velocity); the decision's start (t_decide) and the ramp's end as vertical lines. The velocity axis
+    mu_a, styled by its outcome (:func:`slipchain.analysis.traces.run_outcome`: solid steady, dashed
+    runaway, dotted held, dash-dotted undecided); the decision's start (t_decide) and the ramp's end as vertical lines. The velocity axis
     is symmetric-logarithmic (linear within 1e-5 m/s of zero): the release's overshoot, the creep and
     the ringing through zero on one axis. Each runaway's onset read during the ramp (``onsets``) is a black
     dot at its time. ``traces``, ``onsets``: :func:`slipchain.analysis.traces.velocity_traces`."""
@@ -160,11 +160,11 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     weights = sorted(traces["mu_a"].unique())
     cmap = plt.cm.plasma(np.linspace(0.0, 0.85, max(len(weights), 2)))
     colors = dict(zip(weights, cmap))
+    outcome = dict(zip(onsets["member_id"], onsets["outcome"]))
     for ax, th in zip(axes[0], thetas):
         cur = traces[np.isclose(traces["theta"], th)]
         for (mu_a, _seed, _id), g in cur.groupby(["mu_a", "seed", "member_id"]):
-            status = str(g["status"].iloc[0])
-            ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE.get(status, "-."), lw=1.0)
+            ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE[outcome[_id]], lw=1.0)
         on = onsets[np.isclose(onsets["theta"], th) & onsets["during_ramp"].astype(bool)]
         for _, r in on.iterrows():
             g = cur[cur["member_id"] == r["member_id"]]
@@ -181,7 +181,7 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     Line2D = plt.matplotlib.lines.Line2D
     handles = [Line2D([], [], color=colors[w], label=rf"$\mu_a$ = {w:g}") for w in weights]
     handles += [Line2D([], [], color="0.3", ls=ls, label=label) for ls, label in
-                (("-", "steady"), ("--", "runaway"), (":", "no steady velocity"))]
+                (("-", "steady"), ("--", "runaway"), (":", "held (back on the branch)"), ("-.", "undecided"))]
     handles += [Line2D([], [], color="0.6", ls=":", lw=0.8, label="decision from"),
                 Line2D([], [], color="0.6", ls="--", lw=0.8, label="ramp's end"),
                 Line2D([], [], marker="o", ls="none", color="k", ms=3, label="runaway's onset")]

@@ -134,19 +134,27 @@ def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: float) -> tuple[list[Path], list[str]]:
     """The top's velocity against time of every run of dead-weight stores, over windows of ``window`` s,
-    with each runaway's onset (:mod:`slipchain.analysis.traces`): the figure, traces.csv (one row per
-    window), onsets.csv (one row per run) and mu_max.csv (:func:`~slipchain.analysis.traces.onset_summary`);
-    returns the paths and one line per group of mu_max.csv."""
-    from ..analysis.traces import onset_summary, velocity_traces
+    with each run's outcome and each runaway's onset (:mod:`slipchain.analysis.traces`): the figure,
+    traces.csv (one row per window), onsets.csv (one row per run), mu_max.csv
+    (:func:`~slipchain.analysis.traces.onset_summary`) and brackets.csv (each protocol's bracket on mu_max
+    from its steady, held and runaway weights: :func:`~slipchain.analysis.traces.protocol_brackets`);
+    returns the paths, one line per group of mu_max.csv and one per bracket."""
+    from ..analysis.traces import onset_summary, protocol_brackets, velocity_traces
     from ..plots.dead_weight import plot_velocity_traces
 
     frame, onsets = velocity_traces(stores, window)
     summary = onset_summary(onsets)
+    brackets = protocol_brackets(onsets)
     paths = plot_velocity_traces(frame, onsets, window, out)
     paths += [write_csv(frame, Path(out) / "traces.csv", float_format="%.6g"),
               write_csv(onsets, Path(out) / "onsets.csv", float_format="%.6g"),
-              write_csv(summary, Path(out) / "mu_max.csv", float_format="%.6g")]
+              write_csv(summary, Path(out) / "mu_max.csv", float_format="%.6g"),
+              write_csv(brackets, Path(out) / "brackets.csv", float_format="%.6g")]
     lines = []
+    for _, r in brackets.iterrows():
+        bad = f"; {r['inconsistent']} seed(s) inconsistent" if r["inconsistent"] else ""
+        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C, ramp {r['t_ramp']:g} s, theta = {r['theta']:g}: mu_max in "
+                     f"[{r['lo']:g}, {r['hi']:g}) ({r['per_seed']}{bad})")
     for _, r in summary.iterrows():
         se = f" ± {r['mu_max_se']:.4f}" if np.isfinite(r["mu_max_se"]) else ""
         rse = f" ± {r['R_se']:.4f}" if np.isfinite(r["R_se"]) else ""

@@ -15,7 +15,9 @@ and pull). A rung names its observable and where its numbers are; nothing is typ
 - ``kind = "evaluations"``: a CSV of dead-weight runs (theta, mu_a, velocity_status: a mu-max
   ``evaluations.csv``, or :func:`~slipchain.workflows.dead_weight.store_evaluations` of a sweep
   over ``dead_weight``; rows chosen by ``where`` as a table's): the bounds on mu_max that its runs
-  give at each load, and the range of R they allow, no ratio;
+  give at each load, and the range of R they allow, no ratio. Only steady runs bound mu_max from
+  below there; a table with an ``outcome`` column (``slipchain figure traces``' onsets.csv) counts its
+  held runs too (:func:`slipchain.analysis.traces.run_outcome`: back on the rising branch by the run's end);
 - ``kind = "none"``: not measured yet (``note`` says why and what stands in).
 
 The load effect is the ratio R = obs(theta_max) / obs(theta_min) with its standard error by
@@ -154,38 +156,46 @@ def _ratio_range(e: Effect, ev: "pd.DataFrame") -> Effect:
     return e
 
 
+def _status(ev: "pd.DataFrame") -> tuple[str, tuple[str, ...]]:
+    """The column that classifies a table's runs and the values that bound mu_max from below: the runs'
+    ``outcome`` where the table has one (``slipchain figure traces``' onsets.csv: steady or held,
+    :func:`slipchain.analysis.traces.run_outcome`), else the tester's ``velocity_status`` (steady only)."""
+    return ("outcome", ("steady", "held")) if "outcome" in ev.columns else ("velocity_status", ("ok",))
+
+
 def _interval(ev: "pd.DataFrame", theta: float) -> tuple[float, float]:
     """The bracket on the seed mean of mu_max that the runs at one load give, seed by seed (largest
-    steady mu_a, or 0; smallest runaway mu_a, or inf) and then their envelope: (the smallest lower
-    end, the largest upper end)."""
-    ev = ev[np.isclose(ev["theta"], theta)]
-    lows, highs = [], []
-    for _, g in ev.groupby("seed") if "seed" in ev.columns else [(0, ev)]:
-        ok = g[g["velocity_status"] == "ok"]["mu_a"]
-        run = g[g["velocity_status"] == "runaway"]["mu_a"]
-        lows.append(float(ok.max()) if len(ok) else 0.0)
-        highs.append(float(run.min()) if len(run) else math.inf)
-    return min(lows), max(highs)
+    steady or held mu_a, or 0; smallest runaway mu_a, or inf: :func:`~slipchain.analysis.traces.seed_brackets`)
+    and then their envelope: (the smallest lower end, the largest upper end)."""
+    from ..analysis.traces import seed_brackets
+
+    status, lower = _status(ev)
+    b = seed_brackets(ev[np.isclose(ev["theta"], theta)], status=status, lower=lower)
+    return float(b["lo"].min()), float(b["hi"].max())
 
 
 def _bounds(ev: "pd.DataFrame", theta: float) -> str:
-    """What the dead-weight runs at one load say about mu_max: the largest steady mu_a, the smallest
-    runaway one, and those that decided nothing (not steady within t_max, failed, or not run yet: a
+    """What the dead-weight runs at one load say about mu_max: the largest steady (and held) mu_a, the
+    smallest runaway one, and those that decided nothing (not steady within t_max, failed, or not run yet: a
     store's member without a run file, :data:`.dead_weight.NOT_RUN`)."""
     from .dead_weight import outcome
 
     ev = ev[np.isclose(ev["theta"], theta)]
-    ok = ev[ev["velocity_status"] == "ok"]["mu_a"]
-    run = ev[ev["velocity_status"] == "runaway"]["mu_a"]
-    other = ev[~ev["velocity_status"].isin(["ok", "runaway"])]
-    other = other.assign(velocity_status=outcome(other))
+    status, lower = _status(ev)
+    named = {"ok": "steady", "steady": "steady", "held": "held"}
     parts = []
-    if len(ok):
-        parts.append(f"steady up to mu_a = {ok.max():g}")
+    for s in lower:
+        m = ev[ev[status] == s]["mu_a"]
+        if len(m):
+            parts.append(f"{named[s]} up to mu_a = {m.max():g}")
+    run = ev[ev[status] == "runaway"]["mu_a"]
     if len(run):
         parts.append(f"runaway from mu_a = {run.min():g}")
-    for status, g in other.groupby("velocity_status"):
-        parts.append(f"{status} at mu_a = {', '.join(f'{m:g}' for m in sorted(set(g['mu_a'])))}")
+    other = ev[~ev[status].isin([*lower, "runaway"])]
+    if status == "velocity_status":
+        other = other.assign(velocity_status=outcome(other))
+    for s, g in other.groupby(status):
+        parts.append(f"{s} at mu_a = {', '.join(f'{m:g}' for m in sorted(set(g['mu_a'])))}")
     return ", ".join(parts) if parts else "no runs"
 
 
@@ -193,12 +203,17 @@ def effect_of_evaluations(path: Path | list[Path], where: dict[str, Any] | None 
     """A CSV of dead-weight runs (or several, read as one), its rows chosen by ``where`` (column =
     value, as a table's: e.g. one ramp ``t_ramp`` of a sweep over several): the bounds on mu_max at
     every load (module docstring) and the range of R they allow between the smallest and the largest
-    load (:func:`_ratio_range`; held but not steady runs bound nothing), no ratio."""
+    load (:func:`_ratio_range`; a run held but not steady bounds nothing unless the table says so in an
+    ``outcome`` column, :func:`_status`), no ratio."""
     import pandas as pd
 
     paths = path if isinstance(path, list) else [path]
-    ev = _select(pd.concat([pd.read_csv(p) for p in paths], ignore_index=True), where or {},
-                 ", ".join(os.fspath(p) for p in paths))
+    ev = pd.concat([pd.read_csv(p) for p in paths], ignore_index=True)
+    if "outcome" in ev.columns and "velocity_status" in ev.columns:  # a table of the tester's status alone beside
+        # one of outcomes: its steady and runaway runs as they are, the rest undecided (nothing says held)
+        said = ev["velocity_status"].map({"ok": "steady", "runaway": "runaway"}).fillna("undecided")
+        ev["outcome"] = ev["outcome"].fillna(said)
+    ev = _select(ev, where or {}, ", ".join(os.fspath(p) for p in paths))
     thetas = sorted(ev["theta"].unique())
     bounds = "; ".join(f"theta = {t:g}: {_bounds(ev, t)}" for t in thetas)
     return _ratio_range(Effect(theta_min=float(thetas[0]), theta_max=float(thetas[-1]), bounds=bounds,
