@@ -119,6 +119,8 @@ CATALOGUE: dict[str, Study] = {
                               "docs/tester-3d/index.md", "mu_max at the runaway's onset on 128 x 128, every load (seed 0)"),
     "tester-onset-32-11c": Study("study", 4, "not yet measured (tester-onset-32-seeds: 231-596 s a run)", "docs/tester-3d/index.md",
                                  "mu_max at the runaway's onset on 32 x 32 at Fig. 3's 11 °C, every load (seed 0)"),
+    "tester-onset-64-low": Study("study", 2, "not yet measured (tester-onset-64: 727-2 049 s a run)", "docs/tester-3d/index.md",
+                                 "mu_max at the runaway's onset on 64 x 64 at the tester's pressures, theta 0.02 and 0.01 (seed 0)"),
     "tester-onset-64": Study("study", 4, "76 core-minutes (727-2 049 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                              "mu_max at the runaway's onset on 64 x 64, every load (seed 0)"),
     "tester-16-11c": Study("study", 15, "about 420 s on 16 CPUs", "docs/tester-3d/index.md",
