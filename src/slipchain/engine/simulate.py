@@ -29,6 +29,7 @@ from .control import chunk_samples, row_control
 from .driver import drive
 from .memory import check_memory, extension_refusal
 from .observers import ProgressBar, Recorder
+from .threads import one_blas_thread
 
 
 def run(config: Config | Mapping[str, Any] | None = None, *, backend: str | BackendName = BackendName.CPU,
@@ -69,8 +70,14 @@ def simulate_batch(systems: list[System], states: list[State] | None = None, *,
     each row has its own length control (fixed, automatic, dead-weight ramp) and stops on its
     own: a finished row is skipped by the kernel. On the GPU this is how a sweep fills the device.
     The wall time recorded for every row is the batch's. ``checkpoint``: see :func:`run` (one file
-    for the whole batch).
+    for the whole batch). The BLAS library runs on one thread meanwhile (:func:`.threads.one_blas_thread`),
+    so a run gives the same bits in this process as in a sweep's worker, on any number of cores.
     """
+    with one_blas_thread():
+        return _simulate_batch(systems, states, backend, progress, checkpoint, checkpoint_every)
+
+
+def _simulate_batch(systems, states, backend, progress, checkpoint, checkpoint_every) -> list[xr.Dataset]:
     cfg0 = systems[0].config
     for s in systems:
         c = s.config
