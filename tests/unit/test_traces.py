@@ -7,8 +7,9 @@ import pandas as pd
 import pytest
 
 from slipchain import make_config, run
-from slipchain.analysis.traces import (HELD_WINDOW, last_crossing, onset_summary, protocol_brackets, run_outcome,
-                                       runaway_onset, seed_brackets, window_velocity)
+from slipchain.analysis.traces import (HELD_WINDOW, branch_check, branch_summary, first_crossing, last_crossing,
+                                       onset_summary, protocol_brackets, ramp_branch, run_outcome, runaway_onset,
+                                       seed_brackets, window_velocity)
 from slipchain.sweeps.definition import make_sweep
 from slipchain.workflows.dead_weight import single_contact_maximum
 
@@ -37,6 +38,7 @@ def test_the_onset_is_the_last_upward_crossing():
     i = 60 + np.nonzero(v[60:] > 2e-3)[0][0]  # the runaway's first interval above 2e-3 m/s (not the overshoot's)
     assert last_crossing(t, x, 2e-3) == pytest.approx(t[i + 1])
     assert np.isnan(last_crossing(t, x, 20.0))  # never above at the end
+    assert first_crossing(t, x, 2e-3) == pytest.approx(t[6]) and np.isnan(first_crossing(t, x, 20.0))  # the overshoot
     cfg = make_config(**IDENTICAL, dead_weight=1.2, t_ramp=0.2, t_total=0.3)  # v0 10**delta = 1e-3
     on = runaway_onset(cfg, t, x)
     k = 60 + np.nonzero(v[60:] > 3e-3)[0][0]
@@ -49,17 +51,27 @@ def test_the_onset_is_the_last_upward_crossing():
 
 def test_the_onset_converges_to_the_analytic_maximum_as_the_ramp_slows():
     """Identical contacts loaded over 10 and 40 ms, 4000 samples a ramp: the weight at the onset is
-    within 1e-3 of eq. (1)'s maximum and within one sample's rise (3e-4) at the slower ramp."""
-    f_max, _ = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
+    within 1e-3 of eq. (1)'s maximum and within one sample's rise (3e-4) at the slower ramp, read from the
+    top and from the interface's first slip alike; and below the maximum the ramp traces eq. (1) itself:
+    mu against the interface's velocity within 2e-4 of f(v)/(epsilon f0) from 1e-7 m/s to 0.8 of the peak's
+    velocity (median within 1e-5)."""
+    f_max, u_max = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
     errors = []
     for tr in (0.01, 0.04):
         cfg = make_config(**IDENTICAL, dead_weight=1.2 * f_max, t_ramp=tr, t_total=1.3 * tr, output_interval=tr / 4000)
         ds = run(cfg)
         assert ds.attrs["velocity_status"] == "runaway"
-        on = runaway_onset(cfg, ds["time"].values, ds["X_mean"].values)
+        on = runaway_onset(cfg, ds["time"].values, ds["X_mean"].values, ds["x_mean"].values)
         assert on["during_ramp"] and on["resolution"] == pytest.approx(1.2 * f_max / 4000)
-        errors.append(on["mu_onset"] - f_max)
-    assert abs(errors[0]) < 1e-3 and abs(errors[1]) <= 1.2 * f_max / 4000
+        errors.append((on["mu_onset"] - f_max, on["mu_slip"] - f_max))
+        b = ramp_branch(cfg, ds["time"].values, ds["x_mean"].values, tr / 400, on["t_slip"])
+        assert b["t"].max() <= on["t_slip"] and b["mu"].max() < f_max
+        on_branch = b[(b["v"] > 1e-7) & (b["v"] < 0.8 * u_max)]
+        law = cfg.contact_law.force(on_branch["v"].to_numpy(), cfg.v0) / (cfg.epsilon * cfg.f0)
+        assert np.abs(b["v"] - b["v_slip"]).max() < 1e-7  # every site a contact: only the slip at mu 0.1-0.2 taken off
+        assert len(on_branch) > 300
+        assert np.abs(on_branch["mu"] - law).max() < 2e-4 and np.median(np.abs(on_branch["mu"] - law)) < 1e-5
+    assert max(map(abs, errors[0])) < 1e-3 and max(map(abs, errors[1])) <= 1.2 * f_max / 4000
 
 
 def test_a_run_back_on_the_rising_branch_by_its_end_is_held():
@@ -101,18 +113,43 @@ def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():
         for seed, mu in enumerate(mus):
             rows.append({"N": 16, "temperature": 20.0, "rate": 0.175, "theta": theta, "seed": seed, "mu_onset": mu,
                          "mu_onset_10": mu + 0.01, "during_ramp": True, "resolution": 2e-4})
+            rows[-1]["mu_slip"] = mu - 0.002
     rows.append({**rows[0], "mu_onset": 0.5, "during_ramp": False})  # onset after the ramp: an upper bound only
     s = onset_summary(pd.DataFrame(rows)).set_index("theta")
     assert s.loc[0.1, "mu_max"] == pytest.approx(0.91) and s.loc[1.0, "mu_max"] == pytest.approx(0.96)
     assert s.loc[0.1, "mu_max_se"] == pytest.approx(0.01) and s.loc[1.0, "runs"] == 2
     assert s.loc[1.0, "R"] == pytest.approx(0.96 / 0.91) and s.loc[0.1, "R"] == 1.0
     assert s.loc[1.0, "R_se"] == pytest.approx(0.96 / 0.91 * np.hypot(0.01 / 0.96, 0.01 / 0.91))
-    assert s.loc[1.0, "R_10"] == pytest.approx(0.97 / 0.92)
+    assert s.loc[1.0, "R_10"] == pytest.approx(0.97 / 0.92) and s.loc[1.0, "R_slip"] == pytest.approx(0.958 / 0.908)
     # the rate groups the runs: 1.05 over 6 s and 1.015 over 5.8 s are one rate, 1.0 over 6 s another
     from slipchain.analysis.traces import loading_rate
     cfg = make_config(**IDENTICAL, dead_weight=1.05, t_ramp=6.0, t_total=7.0)
     assert loading_rate(cfg) == loading_rate(cfg.with_updates(dead_weight=1.015, t_ramp=5.8)) == 0.175
     assert loading_rate(cfg.with_updates(dead_weight=1.0)) == pytest.approx(1 / 6, rel=1e-3)
+
+
+def test_the_branch_is_read_at_a_weight_and_at_a_velocity_by_interpolation():
+    """branch_check and branch_summary on a made-up branch v = 1e-4 exp(20 (mu - 0.9)) m/s: each reading is
+    the exact inverse where the samples are dense (log-linear interpolation is exact on an exponential);
+    the last passage counts, so an early overshoot past the level does not."""
+    mu = np.linspace(0.5, 0.97, 95)
+    v = 1e-4 * np.exp(20 * (mu - 0.9))
+    v[3] = 1.0  # an early overshoot (the start's transient)
+    rows = []
+    for theta, shift in ((0.05, 0.0), (1.0, 0.01)):
+        for seed in (0, 1):
+            rows.append(pd.DataFrame({"N": 16, "temperature": 20.0, "rate": 0.175, "theta": theta, "seed": seed,
+                                      "member_id": f"{theta}-{seed}", "mu": mu + shift, "v": v + 1e-5, "v_slip": v}))
+    branch = pd.concat(rows, ignore_index=True)
+    steady = pd.DataFrame([{"N": 16, "temperature": 20.0, "theta": 0.05, "seed": 0, "mu_a": 0.95, "velocity": 3e-4,
+                            "velocity_sem": 1e-5}])
+    c = branch_check(branch, steady)
+    assert len(c) == 1 and c["v_ramp"].iloc[0] == pytest.approx(1e-4 * np.exp(20 * 0.05), rel=1e-9)
+    assert c["ratio"].iloc[0] == pytest.approx(1e-4 * np.exp(1.0) / 3e-4, rel=1e-9)
+    s = branch_summary(branch, velocities=(1e-4,)).set_index("theta")
+    assert s.loc[0.05, "mu"] == pytest.approx(0.9, abs=1e-12) and s.loc[1.0, "mu"] == pytest.approx(0.91, abs=1e-12)
+    assert s.loc[1.0, "R"] == pytest.approx(0.91 / 0.9) and s.loc[1.0, "seeds"] == 2 and s.loc[1.0, "mu_se"] == 0.0
+    assert branch_summary(branch, velocities=(1e3,)).empty  # never reached: no row
 
 
 def test_cli_traces_draws_and_tables_a_store(tmp_path, slipchain_cli, store_of_runs):
@@ -136,6 +173,11 @@ def test_cli_traces_draws_and_tables_a_store(tmp_path, slipchain_cli, store_of_r
     b = pd.read_csv(tmp_path / "o" / "brackets.csv")  # the two weights bracket eq. (1)'s maximum
     assert b[["lo", "hi", "seeds", "runs"]].values.tolist() == [[pytest.approx(0.9 * f_max, rel=1e-5), pytest.approx(1.2 * f_max, rel=1e-5), 1, 2]]
     assert "mu_max in [" in r.stdout
+    assert {"mu_slip", "t_slip", "velocity"} <= set(onsets.columns) and (tmp_path / "o" / "branches.png").stat().st_size > 5000
+    branch = pd.read_csv(tmp_path / "o" / "branch.csv")  # the steady run's ramp and the runaway's, up to its first slip
+    assert set(branch["member_id"]) == {m.id for m in sweep.members} and branch["mu"].max() < f_max
+    check = pd.read_csv(tmp_path / "o" / "branch_check.csv")  # the steady weight 0.9 f_max read on the runaway's ramp
+    assert len(check) == 1 and 0.5 < check["ratio"].iloc[0] < 2.0
     traces = pd.read_csv(tmp_path / "o" / "traces.csv")
     assert set(traces["member_id"]) == {m.id for m in sweep.members} and "theta = 1:" in r.stdout.replace("\n", " ")
     for bad, says in ((["--store", str(tmp_path / "none")], "not a slipchain sweep store"),

@@ -43,6 +43,7 @@ import pandas as pd
 
 ONSET_FACTOR = 3.0  # the runaway's onset: the velocity passes ONSET_FACTOR v0 10**delta for the last time
 ONSET_CHECK = 10.0  # ...and, for comparison, this multiple
+ELASTIC_WEIGHTS = (0.1, 0.2)  # mu_a: where ramp_branch reads the interface's elastic loading rate (eq. (1) slips < 1e-7 m/s there)
 HELD_WINDOW = 0.2  # s: the last stretch of a record whose mean velocity says held (about one ring of the tester's top)
 OUTCOMES = ("steady", "held", "runaway", "undecided")  # run_outcome's values; the first two bound mu_max from below
 
@@ -77,30 +78,46 @@ def last_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
     return float(time[j + 1])
 
 
-def runaway_onset(cfg, time: np.ndarray, x: np.ndarray) -> dict:
+def first_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
+    """The end of the first sample interval over which the velocity exceeds ``threshold`` (m/s); NaN if
+    none does."""
+    v = np.diff(np.asarray(x, float)) / np.diff(np.asarray(time, float))
+    up = np.nonzero(v > threshold)[0]
+    return float(time[up[0] + 1]) if up.size else float("nan")
+
+
+def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray | None = None) -> dict:
     """The applied weight mu_a(t) = mu_a min(t / t_ramp, 1) at the runaway's onset (module docstring)
     for one dead-weight run (its config and its ``X_mean`` record): ``mu_onset`` (ONSET_FACTOR),
     ``mu_onset_10`` (ONSET_CHECK), ``t_onset`` (s), ``during_ramp`` (the onset came while the weight still
     rose: otherwise mu_onset is the full weight, an upper bound of mu_max only) and ``resolution`` (the
     weight's rise over one sample). NaN where the run does not run away or has no ramp to read (the
-    weight at once)."""
+    weight at once). With the interface's record ``x_interface`` (``x_mean``) also ``mu_slip`` and
+    ``t_slip``: where the interface first slips faster than ONSET_FACTOR v0 10**delta (from rest under a
+    ramp there is no overshoot to skip): the end of the creep on the rising branch, a few samples before
+    the top's reading (the heavy top answers the interface's first slip by ringing; under the heaviest
+    loads the interface re-sticks and slips again before it slides on, so its *last* crossing would come
+    late)."""
     from ..model.system import dead_weight_ramp_time
 
     ramp = dead_weight_ramp_time(cfg)
     interval = float(np.median(np.diff(time))) if len(time) > 1 else float("nan")
     nan = float("nan")
-    out = {"mu_onset": nan, "mu_onset_10": nan, "t_onset": nan, "during_ramp": False, "resolution": nan}
+    out = {"mu_onset": nan, "mu_onset_10": nan, "t_onset": nan, "during_ramp": False, "resolution": nan,
+           "mu_slip": nan, "t_slip": nan}
     if ramp is None or not ramp > 2 * interval:
         return out
     scale = cfg.v0 * 10.0 ** cfg.delta
     t_on, t_10 = (last_crossing(time, x, k * scale) for k in (ONSET_FACTOR, ONSET_CHECK))
+    t_slip = first_crossing(time, x_interface, ONSET_FACTOR * scale) if x_interface is not None else nan
 
     def weight(t: float) -> float:
         return cfg.dead_weight * min(t / ramp, 1.0) if np.isfinite(t) else nan
 
     return {"mu_onset": weight(t_on), "mu_onset_10": weight(t_10),
             "t_onset": t_on, "during_ramp": bool(np.isfinite(t_on) and t_on <= ramp),
-            "resolution": cfg.dead_weight * interval / ramp}
+            "resolution": cfg.dead_weight * interval / ramp,
+            "mu_slip": weight(t_slip) if np.isfinite(t_slip) and t_slip <= ramp else nan, "t_slip": t_slip}
 
 
 def run_outcome(cfg, status: str, time: np.ndarray, x: np.ndarray) -> tuple[str, float]:
@@ -175,17 +192,19 @@ def _runs(stores: list[str | os.PathLike]):
             yield Path(store).name, m.id, cfg, ds
 
 
-def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
     """Every completed run of dead-weight sweep stores: its windowed velocities (:func:`window_velocity`;
     columns store, member_id, N, temperature, theta, seed, mu_a, t_ramp, rate (:func:`loading_rate`),
     t_decide, status (the tester's classification the run recorded), t (s), v (m/s)) and, one row per run
     with the same identifying columns, its outcome and end velocity (:func:`run_outcome`: ``outcome``,
-    ``v_end``) and its runaway onset (:func:`runaway_onset`). SweepError naming the store for one that is not a store,
+    ``v_end``), the tester's steady velocity and its SE where it slid steadily, and its runaway onset
+    (:func:`runaway_onset`); and the rising branch its ramp traced (:func:`ramp_branch`: t, mu, v, with the
+    identifying columns). SweepError naming the store for one that is not a store,
     holds no completed run, or holds runs without a dead weight; ValueError for a window that is not a
     positive number of seconds."""
     if not (isinstance(window, (int, float)) and np.isfinite(window) and window > 0):
         raise ValueError(f"window has value {window!r}; expected a positive number of seconds (e.g. 0.02)")
-    traces, onsets = [], []
+    traces, onsets, branches = [], [], []
     for store, mid, cfg, ds in _runs(stores):
         who = {"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "theta": cfg.theta,
                "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": cfg.t_ramp, "rate": loading_rate(cfg),
@@ -194,29 +213,38 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
         t, v = window_velocity(time, x, window)
         traces.append(pd.DataFrame({**who, "t": t, "v": v}))
         outcome, v_end = run_outcome(cfg, who["status"], time, x)
-        onsets.append({**who, "outcome": outcome, "v_end": v_end, **runaway_onset(cfg, time, x)})
-    return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets)
+        xi = ds["x_mean"].values
+        onset = runaway_onset(cfg, time, x, xi)
+        onsets.append({**who, "outcome": outcome, "v_end": v_end, "velocity": float(ds.attrs.get("velocity", np.nan)),
+                       "velocity_sem": float(ds.attrs.get("velocity_sem", np.nan)), **onset})
+        end = np.nanmin([onset["t_onset"], onset["t_slip"]]) if np.isfinite([onset["t_onset"], onset["t_slip"]]).any() else np.nan
+        branches.append(ramp_branch(cfg, time, xi, window, end).assign(**who))
+    return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets), pd.concat(branches, ignore_index=True)
 
 
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
     """mu_max per group of runs (:data:`KEYS`: interface, temperature, loading rate, load) from the onsets
     read during the ramp: the mean over runs (seeds; a seed with several weights counts once, its mean), its
     standard error (the seeds' scatter; NaN for one), the mean read at the check threshold
-    (``mu_max_10``), and R = the group's mean over the smallest load's at the same interface, temperature
-    and rate, with its standard error (independent errors), and ``R_10`` the same at the check threshold
-    (how much R depends on where the onset is read)."""
+    (``mu_max_10``) and from the interface's first slip (``mu_max_slip``), and R = the group's mean over the
+    smallest load's at the same interface, temperature and rate, with its standard error (independent errors),
+    ``R_10`` the same at the check threshold and ``R_slip`` from the interface's first slip (how much R depends
+    on where and how the onset is read)."""
     ok = onsets[onsets["during_ramp"].astype(bool)]
+    if "mu_slip" not in ok.columns:
+        ok = ok.assign(mu_slip=np.nan)
     per_seed = ok.groupby([*KEYS, "seed"], dropna=False).agg(mu=("mu_onset", "mean"), mu_10=("mu_onset_10", "mean"),
+                                                            mu_slip=("mu_slip", "mean"),
                                                             resolution=("resolution", "max")).reset_index()
     rows = []
     for key, g in per_seed.groupby(list(KEYS), dropna=False):
         n = len(g)
         rows.append({**dict(zip(KEYS, key)), "runs": n, "mu_max": g["mu"].mean(),
                      "mu_max_se": g["mu"].std(ddof=1) / np.sqrt(n) if n > 1 else np.nan,
-                     "mu_max_10": g["mu_10"].mean(), "resolution": g["resolution"].max()})
-    table = pd.DataFrame(rows, columns=[*KEYS, "runs", "mu_max", "mu_max_se", "mu_max_10", "resolution"])
+                     "mu_max_10": g["mu_10"].mean(), "mu_max_slip": g["mu_slip"].mean(), "resolution": g["resolution"].max()})
+    table = pd.DataFrame(rows, columns=[*KEYS, "runs", "mu_max", "mu_max_se", "mu_max_10", "mu_max_slip", "resolution"])
     ratio = pd.Series(np.nan, index=table.index)
-    ratio_se, ratio_10 = ratio.copy(), ratio.copy()
+    ratio_se, ratio_10, ratio_slip = ratio.copy(), ratio.copy(), ratio.copy()
     # R compares the loads of one group: every key but theta (elastic runs: temperature NaN, hence dropna=False)
     for _, same in table.groupby([k for k in KEYS if k != "theta"], dropna=False):
         low = same.loc[same["theta"].idxmin()]
@@ -225,7 +253,113 @@ def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
         ratio_se[same.index] = q * np.hypot(same["mu_max_se"] / same["mu_max"], low["mu_max_se"] / low["mu_max"])
         ratio_se[low.name] = 0.0
         ratio_10[same.index] = same["mu_max_10"] / low["mu_max_10"]
-    return table.assign(R=ratio.to_numpy(), R_se=ratio_se.to_numpy(), R_10=ratio_10.to_numpy())
+        ratio_slip[same.index] = same["mu_max_slip"] / low["mu_max_slip"]
+    return table.assign(R=ratio.to_numpy(), R_se=ratio_se.to_numpy(), R_10=ratio_10.to_numpy(), R_slip=ratio_slip.to_numpy())
+
+
+def ramp_branch(cfg, time: np.ndarray, x: np.ndarray, window: float, t_end: float) -> pd.DataFrame:
+    """mu(v) on the rising branch read from a slowly loaded run (Figs. 2-3's axes from one run): at each
+    window (:func:`window_velocity`) that ends by ``t_end`` (the runaway's onset, or the ramp's end if it
+    does not run away) and within the ramp, the window's mean applied weight (the ramp is linear: mu_a
+    t/t_ramp half a sample after the window's midpoint, the engine holding each sample's weight at its
+    value at the sample's end), against the window's mean velocity of ``x``, the
+    **interface's** mean position ``x_mean``: the slip. (Not the top's: while the weight rises the top also
+    moves by the slider's growing elastic shear, H tau/G on the slab, at a rate that at theta = 1 on the
+    tester's 0.5-cm block, mu_a rising at 0.175 per second, is about 1.7e-3 m/s, ten times the creep; in
+    steady sliding the two move together.) Where the weight rises slowly against the block's response the
+    block follows its steady branch, so each point is a steady run's (mu, v) read without waiting for it;
+    the check is :func:`branch_check`. Empty without a ramp longer than two windows.
+
+    ``v_slip``: the velocity less the interface's elastic loading rate. Where only a fraction theta of the
+    interface's sites carries a contact, the free sites move with the slab's growing shear, so the mean
+    interface position advances even where nothing slips, at a rate proportional to the weight's (about
+    1e-5 m/s at theta 0.05-0.5 on the tester's block at 0.175 per second; none at theta = 1, every site a
+    contact). It is taken as the median window velocity while the weight is between
+    :data:`ELASTIC_WEIGHTS` (where eq. (1) has the contacts creep at 1e-9 to 1e-7 m/s) and subtracted."""
+    from ..model.system import dead_weight_ramp_time
+
+    ramp = dead_weight_ramp_time(cfg)
+    if ramp is None or not ramp > 2 * window:
+        return pd.DataFrame({"t": [], "mu": [], "v": [], "v_slip": []})
+    t, v = window_velocity(time, x, window)
+    dt = float(np.median(np.diff(time)))
+    half = 0.5 * max(int(round(window / dt)), 1) * dt  # the window's half length, as window_velocity rounds it
+    end = min(t_end, ramp) if np.isfinite(t_end) else ramp
+    keep = t + half <= end + 0.5 * dt
+    # the engine raises the weight a sample at a time, holding over each sample its value at the sample's end
+    # (control.DeadWeightRamp): over a window the mean weight is the one half a sample after its midpoint
+    mu = cfg.dead_weight * (t + 0.5 * dt) / ramp
+    low = (mu >= ELASTIC_WEIGHTS[0]) & (mu <= ELASTIC_WEIGHTS[1]) & (t + half <= ramp)
+    v_el = float(np.median(v[low])) if low.any() else 0.0
+    return pd.DataFrame({"t": t[keep], "mu": mu[keep], "v": v[keep], "v_slip": v[keep] - v_el})
+
+
+def _last_passage(a: np.ndarray, b: np.ndarray, level: float) -> float:
+    """``b`` where ``a`` passes ``level`` upwards for the last time, linear between the two samples around
+    it (NaN if it never does)."""
+    up = np.nonzero((a[1:] >= level) & (a[:-1] < level))[0]
+    if not up.size:
+        return float("nan")
+    i = up[-1]
+    return float(b[i] + (level - a[i]) / (a[i + 1] - a[i]) * (b[i + 1] - b[i]))
+
+
+def _equal(column: pd.Series, value) -> np.ndarray:
+    """Rows of a numeric ``column`` equal to ``value`` (np.isclose); NaN or None (an elastic run's
+    temperature) equal to NaN or None."""
+    col = pd.to_numeric(column, errors="coerce").to_numpy(dtype=float)
+    return np.isnan(col) if value is None or pd.isna(value) else np.isclose(col, float(value))
+
+
+def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
+    """The ramp's reading against the tester's: for every steady run (``steady``: rows with N, temperature,
+    theta, seed, mu_a, velocity, velocity_sem), the velocity at which the slowly loaded runs of the same
+    interface, temperature, load and seed (``branch``: :func:`ramp_branch` rows with those columns, a
+    ``member_id`` and the ``rate``) passed that weight (their slip velocity ``v_slip``), interpolated in log v between their two windows
+    around it (the last passage, so the start's transient does not count), and its ratio to the steady
+    velocity. One row per (steady run, ramp run); none where no ramp run reached the weight."""
+    rows = []
+    keys = ["N", "temperature", "theta", "seed"]
+    for _, s in steady.iterrows():
+        same = branch[np.all([_equal(branch[k], s[k]) for k in keys], axis=0) & (branch["v_slip"] > 0)]
+        for mid, g in same.groupby("member_id"):
+            v_ramp = float(np.exp(_last_passage(g["mu"].to_numpy(), np.log(g["v_slip"].to_numpy()), s["mu_a"])))
+            if np.isfinite(v_ramp):
+                rows.append({**{k: s[k] for k in keys}, "mu_a": s["mu_a"], "v_steady": s["velocity"],
+                             "v_steady_se": s["velocity_sem"], "ramp_member": mid, "rate": g["rate"].iloc[0],
+                             "v_ramp": v_ramp, "ratio": v_ramp / s["velocity"]})
+    return pd.DataFrame(rows, columns=[*keys, "mu_a", "v_steady", "v_steady_se", "ramp_member", "rate", "v_ramp", "ratio"])
+
+
+BRANCH_VELOCITIES = (3e-5, 1e-4, 2e-4)  # m/s: where branch_summary reads mu(v), below every load's maximum
+
+
+def branch_summary(branch: pd.DataFrame, velocities: tuple[float, ...] = BRANCH_VELOCITIES) -> pd.DataFrame:
+    """mu on the rising branch at fixed sliding velocities, Figs. 2-3's comparison at a given speed: per run
+    of ``branch`` (:func:`ramp_branch`), the weight where its slip velocity ``v_slip`` passed each of
+    ``velocities`` for the last time (interpolated in log v); then per interface, temperature, loading rate and load (:data:`KEYS`)
+    the mean over seeds (a seed's several runs: their mean), its standard error, and R = that mean over the
+    smallest load's at the same interface, temperature and rate (independent errors). One row per group and
+    velocity."""
+    per_run = []
+    for (mid,), g in branch[branch["v_slip"] > 0].groupby(["member_id"]):
+        logv, mu = np.log(g["v_slip"].to_numpy()), g["mu"].to_numpy()
+        for v in velocities:
+            per_run.append({**{k: g[k].iloc[0] for k in (*KEYS, "seed")}, "v": v, "mu": _last_passage(logv, mu, np.log(v))})
+    runs = pd.DataFrame(per_run, columns=[*KEYS, "seed", "v", "mu"]).dropna(subset=["mu"])
+    per_seed = runs.groupby([*KEYS, "v", "seed"], dropna=False)["mu"].mean().reset_index()
+    table = per_seed.groupby([*KEYS, "v"], dropna=False)["mu"].agg(["mean", "std", "count"]).reset_index()
+    table = table.rename(columns={"mean": "mu", "count": "seeds"})
+    table["mu_se"] = np.where(table["seeds"] > 1, table["std"] / np.sqrt(table["seeds"]), np.nan)
+    table = table.drop(columns="std")
+    table["R"], table["R_se"] = np.nan, np.nan
+    for _, same in table.groupby([k for k in KEYS if k != "theta"] + ["v"], dropna=False):
+        low = same.loc[same["theta"].idxmin()]
+        q = same["mu"] / low["mu"]
+        table.loc[same.index, "R"] = q
+        table.loc[same.index, "R_se"] = q * np.hypot(same["mu_se"] / same["mu"], low["mu_se"] / low["mu"])
+        table.loc[low.name, "R_se"] = 0.0
+    return table[[*KEYS, "v", "seeds", "mu", "mu_se", "R", "R_se"]]
 
 
 def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
@@ -243,6 +377,6 @@ def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=[*BRACKET_KEYS, "lo", "hi", "seeds", "runs", "inconsistent", "per_seed"])
 
 
-__all__ = ["BRACKET_KEYS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR", "OUTCOMES", "last_crossing", "loading_rate",
+__all__ = ["BRACKET_KEYS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "branch_check", "branch_summary", "first_crossing", "ramp_branch", "KEYS", "ONSET_CHECK", "ONSET_FACTOR", "OUTCOMES", "last_crossing", "loading_rate",
            "onset_summary", "protocol_brackets", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
            "window_velocity"]

@@ -121,6 +121,8 @@ def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Pat
         ax.plot([], [], "k-", label="fitted model (ends at its maximum, *)")
         ax.plot([], [], ">", color="gray", ls="none", label="runaway (right edge)")
         ax.set_xscale("log")
+        ax.set_xlim(1e-8, None)
+        ax.set_ylim(0.25, 1.02)  # below, the elastic rate taken off is the velocity itself: noise about zero
         ax.set_xlabel("v (m/s)")
         ax.set_ylabel(r"$\mu$")
         e = f.params
@@ -192,4 +194,44 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     return save_figure(fig, out, "velocity_traces")
 
 
-__all__ = ["STATUS_STYLE", "plot_velocity_traces", "plot_fit", "plot_mu_max", "spring_drive_maxima"]
+def plot_branches(branch: pd.DataFrame, onsets: pd.DataFrame, out: str | os.PathLike) -> list[Path]:
+    """Figs. 2-3 from slowly loaded runs: mu against the interface's slip velocity (log; ``v_slip``, the
+    elastic loading rate of the contact-free sites taken off) as each run's ramp traced it (:func:`slipchain.analysis.traces.ramp_branch`), one panel per interface and temperature,
+    one line per run coloured by theta; a runaway's branch ends at its onset (a black dot: mu_max); each
+    steady run's tester reading (its weight against its steady velocity, ``onsets`` rows with outcome
+    steady) as an open circle of its load's colour."""
+    plt = pyplot()
+    groups = sorted(branch.groupby(["N", "temperature"], dropna=False).groups)
+    fig, axes = plt.subplots(1, len(groups), figsize=(4.2 * len(groups) + 1.4, 4.2), sharey=True, squeeze=False)
+    thetas = sorted(branch["theta"].unique())
+    colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0.0, 0.9, max(len(thetas), 2)))))
+    for ax, (n, temp) in zip(axes[0], groups):
+        cur = branch[(branch["N"] == n) & ((branch["temperature"] == temp) | (pd.isna(temp) & branch["temperature"].isna()))]
+        for (th, _id), g in cur.groupby(["theta", "member_id"]):
+            g = g[g["v_slip"] > 0]
+            ax.plot(g["v_slip"], g["mu"], color=colors[th], lw=0.8, alpha=0.8)
+            on = onsets[(onsets["member_id"] == _id) & onsets["during_ramp"].astype(bool)]
+            if len(on) and len(g):
+                ax.plot(g["v_slip"].iloc[-1], g["mu"].iloc[-1], "o", color="k", ms=3, zorder=5)
+        same = onsets[(onsets["N"] == n) & (onsets["outcome"] == "steady") & onsets["velocity"].notna()
+                      & ((onsets["temperature"] == temp) | (pd.isna(temp) & onsets["temperature"].isna()))]
+        for _, r in same.iterrows():
+            ax.plot(r["velocity"], r["mu_a"], "o", mfc="none", mec=colors.get(r["theta"], "0.3"), ms=6, zorder=6)
+        ax.set_xscale("log")
+        ax.set_xlabel("slip velocity of the interface (m/s)")
+        label = f"{n:g} x {n:g}" + ("" if pd.isna(temp) else f", {temp:g} °C")
+        ax.set_title(label, fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel(r"applied $\mu_a$ (the weight while it rises)")
+    Line2D = plt.matplotlib.lines.Line2D
+    handles = [Line2D([], [], color=colors[t], label=rf"$\theta$ = {t:g}") for t in thetas]
+    handles += [Line2D([], [], marker="o", ls="none", color="k", ms=3, label="runaway's onset (mu_max)"),
+                Line2D([], [], marker="o", ls="none", mfc="none", mec="0.3", ms=6, label="steady run (tester)")]
+    fig.subplots_adjust(right=1.0 - 1.4 / fig.get_figwidth())
+    fig.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1.0 - 1.35 / fig.get_figwidth(), 0.5),
+               frameon=False)
+    fig.suptitle("mu(v) on the rising branch as the slowly rising weight traces it (Figs. 2-3's axes)", fontsize=10)
+    return save_figure(fig, out, "branches")
+
+
+__all__ = ["STATUS_STYLE", "plot_branches", "plot_velocity_traces", "plot_fit", "plot_mu_max", "spring_drive_maxima"]

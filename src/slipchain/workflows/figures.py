@@ -136,21 +136,35 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
     """The top's velocity against time of every run of dead-weight stores, over windows of ``window`` s,
     with each run's outcome and each runaway's onset (:mod:`slipchain.analysis.traces`): the figure,
     traces.csv (one row per window), onsets.csv (one row per run), mu_max.csv
-    (:func:`~slipchain.analysis.traces.onset_summary`) and brackets.csv (each protocol's bracket on mu_max
-    from its steady, held and runaway weights: :func:`~slipchain.analysis.traces.protocol_brackets`);
-    returns the paths, one line per group of mu_max.csv and one per bracket."""
-    from ..analysis.traces import onset_summary, protocol_brackets, velocity_traces
-    from ..plots.dead_weight import plot_velocity_traces
+    (:func:`~slipchain.analysis.traces.onset_summary`), brackets.csv (each protocol's bracket on mu_max
+    from its steady, held and runaway weights: :func:`~slipchain.analysis.traces.protocol_brackets`), and
+    for slowly loaded runs the rising branch their ramps traced (branch.csv, the branches figure) checked
+    against the steady runs (branch_check.csv) and read at fixed velocities (branch_mu.csv:
+    :func:`~slipchain.analysis.traces.branch_summary`); returns the paths, a line on that check, one line per group
+    of mu_max.csv and one per bracket."""
+    from ..analysis.traces import branch_check, branch_summary, onset_summary, protocol_brackets, velocity_traces
+    from ..plots.dead_weight import plot_branches, plot_velocity_traces
 
-    frame, onsets = velocity_traces(stores, window)
+    frame, onsets, branch = velocity_traces(stores, window)
     summary = onset_summary(onsets)
     brackets = protocol_brackets(onsets)
+    check = branch_check(branch, onsets[onsets["outcome"] == "steady"])
+    at_v = branch_summary(branch)
     paths = plot_velocity_traces(frame, onsets, window, out)
+    if len(branch):
+        paths += plot_branches(branch, onsets, out)
     paths += [write_csv(frame, Path(out) / "traces.csv", float_format="%.6g"),
               write_csv(onsets, Path(out) / "onsets.csv", float_format="%.6g"),
               write_csv(summary, Path(out) / "mu_max.csv", float_format="%.6g"),
-              write_csv(brackets, Path(out) / "brackets.csv", float_format="%.6g")]
+              write_csv(brackets, Path(out) / "brackets.csv", float_format="%.6g"),
+              write_csv(branch, Path(out) / "branch.csv", float_format="%.6g"),
+              write_csv(check, Path(out) / "branch_check.csv", float_format="%.6g"),
+              write_csv(at_v, Path(out) / "branch_mu.csv", float_format="%.6g")]
     lines = []
+    if len(check):
+        r = check["ratio"]
+        lines.append(f"the ramp's velocity at a steady run's weight over the steady velocity: median {r.median():.3f}, "
+                     f"{r.min():.3f} to {r.max():.3f} ({len(check)} pairs; branch_check.csv)")
     for _, r in brackets.iterrows():
         bad = f"; {r['inconsistent']} seed(s) inconsistent" if r["inconsistent"] else ""
         lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C, ramp {r['t_ramp']:g} s, theta = {r['theta']:g}: mu_max in "
