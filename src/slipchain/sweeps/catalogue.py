@@ -89,6 +89,8 @@ CATALOGUE: dict[str, Study] = {
                                 "tester-16-long's release at once at Fig. 3's 11 °C (seed 0)"),
     "tester-16-release": Study("study", 4, "not yet measured (tester-16-long: 123-250 s a run at theta = 0.5)", "docs/tester-3d/index.md",
                                "tester-16-long at theta = 0.5 with the weight released over 0.1 and 0.3 s"),
+    "tester-16-release-low": Study("study", 4, "not yet measured (tester-16-long: 108-909 s a run at theta = 0.05)", "docs/tester-3d/index.md",
+                                   "tester-16-release at theta = 0.05 (0.85 and 0.9 over 0.1 and 0.3 s)"),
     "tester-16-long-seeds": Study("study", 16, "not yet measured (tester-16-long: 35 core-minutes a seed)",
                                   "docs/tester-3d/index.md", "tester-16-long's brackets for seeds 1 and 2"),
     "tester-16-low": Study("study", 4, "22 min", "docs/tester-3d/index.md",
