@@ -243,18 +243,30 @@ def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
                      "mu_max_se": g["mu"].std(ddof=1) / np.sqrt(n) if n > 1 else np.nan,
                      "mu_max_10": g["mu_10"].mean(), "mu_max_slip": g["mu_slip"].mean(), "resolution": g["resolution"].max()})
     table = pd.DataFrame(rows, columns=[*KEYS, "runs", "mu_max", "mu_max_se", "mu_max_10", "mu_max_slip", "resolution"])
-    ratio = pd.Series(np.nan, index=table.index)
-    ratio_se, ratio_10, ratio_slip = ratio.copy(), ratio.copy(), ratio.copy()
     # R compares the loads of one group: every key but theta (elastic runs: temperature NaN, hence dropna=False)
-    for _, same in table.groupby([k for k in KEYS if k != "theta"], dropna=False):
+    groups = [k for k in KEYS if k != "theta"]
+    ratio, ratio_se = _to_smallest_load(table, "mu_max", "mu_max_se", groups)
+    return table.assign(R=ratio, R_se=ratio_se, R_10=_to_smallest_load(table, "mu_max_10", None, groups)[0],
+                        R_slip=_to_smallest_load(table, "mu_max_slip", None, groups)[0])
+
+
+def _to_smallest_load(table: pd.DataFrame, value: str, se: str | None, groups: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's ``value`` over the smallest theta's in its group (the rows equal in ``groups``), and with
+    a standard-error column ``se`` the ratio's error (:func:`slipchain.analysis.statistics.ratio`: independent
+    errors; 0 at the smallest load itself); NaN errors without one."""
+    from .statistics import ratio
+
+    r = pd.Series(np.nan, index=table.index)
+    r_se = r.copy()
+    for _, same in table.groupby(groups, dropna=False):
         low = same.loc[same["theta"].idxmin()]
-        q = same["mu_max"] / low["mu_max"]
-        ratio[same.index] = q
-        ratio_se[same.index] = q * np.hypot(same["mu_max_se"] / same["mu_max"], low["mu_max_se"] / low["mu_max"])
-        ratio_se[low.name] = 0.0
-        ratio_10[same.index] = same["mu_max_10"] / low["mu_max_10"]
-        ratio_slip[same.index] = same["mu_max_slip"] / low["mu_max_slip"]
-    return table.assign(R=ratio.to_numpy(), R_se=ratio_se.to_numpy(), R_10=ratio_10.to_numpy(), R_slip=ratio_slip.to_numpy())
+        if se is None:
+            r[same.index] = same[value] / low[value]
+            continue
+        q, e = ratio(same[value], same[se], low[value], low[se])
+        r[same.index], r_se[same.index] = q, e
+        r_se[low.name] = 0.0
+    return r.to_numpy(), r_se.to_numpy()
 
 
 def ramp_branch(cfg, time: np.ndarray, x: np.ndarray, window: float, t_end: float) -> pd.DataFrame:
@@ -315,9 +327,9 @@ def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
     """The ramp's reading against the tester's: for every steady run (``steady``: rows with N, temperature,
     theta, seed, mu_a, velocity, velocity_sem), the velocity at which the slowly loaded runs of the same
     interface, temperature, load and seed (``branch``: :func:`ramp_branch` rows with those columns, a
-    ``member_id`` and the ``rate``) passed that weight (their slip velocity ``v_slip``), interpolated in log v between their two windows
-    around it (the last passage, so the start's transient does not count), and its ratio to the steady
-    velocity. One row per (steady run, ramp run); none where no ramp run reached the weight."""
+    ``member_id`` and the ``rate``) passed that weight (their slip velocity ``v_slip``), interpolated in
+    log v between their two windows around it (the last passage, so the start's transient does not
+    count), and its ratio to the steady velocity. One row per (steady run, ramp run); none where no ramp run reached the weight."""
     rows = []
     keys = ["N", "temperature", "theta", "seed"]
     for _, s in steady.iterrows():
@@ -337,8 +349,8 @@ BRANCH_VELOCITIES = (3e-5, 1e-4, 2e-4)  # m/s: where branch_summary reads mu(v),
 def branch_summary(branch: pd.DataFrame, velocities: tuple[float, ...] = BRANCH_VELOCITIES) -> pd.DataFrame:
     """mu on the rising branch at fixed sliding velocities, Figs. 2-3's comparison at a given speed: per run
     of ``branch`` (:func:`ramp_branch`), the weight where its slip velocity ``v_slip`` passed each of
-    ``velocities`` for the last time (interpolated in log v); then per interface, temperature, loading rate and load (:data:`KEYS`)
-    the mean over seeds (a seed's several runs: their mean), its standard error, and R = that mean over the
+    ``velocities`` for the last time (interpolated in log v); then per interface, temperature, loading
+    rate and load (:data:`KEYS`) the mean over seeds (a seed's several runs: their mean), its standard error, and R = that mean over the
     smallest load's at the same interface, temperature and rate (independent errors). One row per group and
     velocity."""
     per_run = []
@@ -352,13 +364,7 @@ def branch_summary(branch: pd.DataFrame, velocities: tuple[float, ...] = BRANCH_
     table = table.rename(columns={"mean": "mu", "count": "seeds"})
     table["mu_se"] = np.where(table["seeds"] > 1, table["std"] / np.sqrt(table["seeds"]), np.nan)
     table = table.drop(columns="std")
-    table["R"], table["R_se"] = np.nan, np.nan
-    for _, same in table.groupby([k for k in KEYS if k != "theta"] + ["v"], dropna=False):
-        low = same.loc[same["theta"].idxmin()]
-        q = same["mu"] / low["mu"]
-        table.loc[same.index, "R"] = q
-        table.loc[same.index, "R_se"] = q * np.hypot(same["mu_se"] / same["mu"], low["mu_se"] / low["mu"])
-        table.loc[low.name, "R_se"] = 0.0
+    table["R"], table["R_se"] = _to_smallest_load(table, "mu", "mu_se", [k for k in KEYS if k != "theta"] + ["v"])
     return table[[*KEYS, "v", "seeds", "mu", "mu_se", "R", "R_se"]]
 
 
@@ -377,6 +383,7 @@ def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=[*BRACKET_KEYS, "lo", "hi", "seeds", "runs", "inconsistent", "per_seed"])
 
 
-__all__ = ["BRACKET_KEYS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "branch_check", "branch_summary", "first_crossing", "ramp_branch", "KEYS", "ONSET_CHECK", "ONSET_FACTOR", "OUTCOMES", "last_crossing", "loading_rate",
-           "onset_summary", "protocol_brackets", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
+__all__ = ["BRACKET_KEYS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR",
+           "OUTCOMES", "branch_check", "branch_summary", "first_crossing", "last_crossing", "loading_rate", "onset_summary",
+           "protocol_brackets", "ramp_branch", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
            "window_velocity"]
