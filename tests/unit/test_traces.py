@@ -47,6 +47,8 @@ def test_the_onset_is_the_last_upward_crossing():
     assert on["mu_onset_10"] > on["mu_onset"]
     at_once = runaway_onset(cfg.with_updates(t_ramp=1e-3), t, x)  # the weight at once: nothing to read
     assert np.isnan(at_once["mu_onset"]) and not at_once["during_ramp"]
+    fast = np.concatenate([[0.0], np.cumsum(np.where(v < 1e-3, 2e-3, v) * 1e-3)])  # loading alone at 2e-3 m/s
+    assert np.isnan(runaway_onset(cfg, t, fast)["mu_onset"])  # above half the threshold (1.5e-3): a release
 
 
 def test_the_onset_converges_to_the_analytic_maximum_as_the_ramp_slows():

@@ -91,8 +91,10 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray 
     for one dead-weight run (its config and its ``X_mean`` record): ``mu_onset`` (ONSET_FACTOR),
     ``mu_onset_10`` (ONSET_CHECK), ``t_onset`` (s), ``during_ramp`` (the onset came while the weight still
     rose: otherwise mu_onset is the full weight, an upper bound of mu_max only) and ``resolution`` (the
-    weight's rise over one sample). NaN where the run does not run away or has no ramp to read (the
-    weight at once). With the interface's record ``x_interface`` (``x_mean``) also ``mu_slip`` and
+    weight's rise over one sample). NaN where the run does not run away or has no ramp to read: the
+    weight at once, or raised so fast that the top's velocity from the slab's growing elastic shear alone
+    (its median over 10-50 % of the ramp) exceeds half the threshold (a release over 0.1-0.3 s: the
+    threshold would be crossed by loading, not by sliding). With the interface's record ``x_interface`` (``x_mean``) also ``mu_slip`` and
     ``t_slip``: where the interface first slips faster than ONSET_FACTOR v0 10**delta (from rest under a
     ramp there is no overshoot to skip): the end of the creep on the rising branch, a few samples before
     the top's reading (the heavy top answers the interface's first slip by ringing; under the heaviest
@@ -108,6 +110,10 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray 
     if ramp is None or not ramp > 2 * interval:
         return out
     scale = cfg.v0 * 10.0 ** cfg.delta
+    mid = (time > 0.1 * ramp) & (time <= 0.5 * ramp)
+    v = np.diff(x) / np.diff(time)
+    if mid[1:].any() and np.median(v[mid[1:]]) > 0.5 * ONSET_FACTOR * scale:
+        return out  # the top's elastic loading alone is near the threshold: a release, not a slow ramp
     t_on, t_10 = (last_crossing(time, x, k * scale) for k in (ONSET_FACTOR, ONSET_CHECK))
     t_slip = first_crossing(time, x_interface, ONSET_FACTOR * scale) if x_interface is not None else nan
 
