@@ -89,6 +89,8 @@ CATALOGUE: dict[str, Study] = {
                                 "tester-16-long's release at once at Fig. 3's 11 °C (seed 0)"),
     "tester-16-release": Study("study", 4, "not yet measured (tester-16-long: 123-250 s a run at theta = 0.5)", "docs/tester-3d/index.md",
                                "tester-16-long at theta = 0.5 with the weight released over 0.1 and 0.3 s"),
+    "tester-16-release-2": Study("study", 6, "not yet measured (tester-16-release: 43-430 s a run)", "docs/tester-3d/index.md",
+                                 "tester-16-release's brackets closed: theta = 0.05 at 0.95, 1.0 and theta = 0.5 at 0.6, 0.75"),
     "tester-16-release-low": Study("study", 4, "not yet measured (tester-16-long: 108-909 s a run at theta = 0.05)", "docs/tester-3d/index.md",
                                    "tester-16-release at theta = 0.05 (0.85 and 0.9 over 0.1 and 0.3 s)"),
     "tester-16-long-seeds": Study("study", 16, "not yet measured (tester-16-long: 35 core-minutes a seed)",
