@@ -12,8 +12,12 @@ took 70 us on two threads against 3 us on one, and 10 ms of a 128 x 80 slab unde
 15.0 s against 6.4 s (docs/performance.md). No vector here is long enough to gain from threads.
 
 :func:`one_blas_thread` limits BLAS to one thread (threadpoolctl) for the duration of a run and
-restores the process's own limits when the last run of the process ends (runs in several threads
-of one process share the limit: the count of runs in progress decides when it is lifted).
+restores the process's own limits when the last run of the process ends (nested runs share the limit:
+the count of runs in progress decides when it is lifted). Runs in several threads of one process: the
+limit is set by the thread that enters first, and with scipy-openblas 0.3.31 a setting made in one
+thread did not show in the others once several threads had called BLAS (seen in the suite after
+tests/physics/test_concurrency.py); such a process should start with ``OPENBLAS_NUM_THREADS=1``, as
+Dask's workers do.
 """
 
 from __future__ import annotations
