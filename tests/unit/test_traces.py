@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 
 from slipchain import make_config, run
-from slipchain.analysis.traces import (HELD_WINDOW, branch_check, branch_summary, first_crossing, last_crossing,
+from slipchain.analysis.traces import (BRANCH_VELOCITIES, HELD_WINDOW, branch_check, branch_summary, first_crossing,
+                                       is_release, last_crossing,
                                        onset_summary, protocol_brackets, ramp_branch, run_outcome, runaway_onset,
                                        seed_brackets, window_velocity)
 from slipchain.sweeps.definition import make_sweep
@@ -49,6 +50,25 @@ def test_the_onset_is_the_last_upward_crossing():
     assert np.isnan(at_once["mu_onset"]) and not at_once["during_ramp"]
     fast = np.concatenate([[0.0], np.cumsum(np.where(v < 1e-3, 2e-3, v) * 1e-3)])  # loading alone at 2e-3 m/s
     assert np.isnan(runaway_onset(cfg, t, fast)["mu_onset"])  # above half the threshold (1.5e-3): a release
+
+
+def test_a_release_is_not_read_as_a_slow_ramp():
+    """is_release on records of exact velocities (v0 10**delta = 1e-3 m/s, so half the onset threshold is
+    1.5e-3): the weight at once, or a top loaded at 2e-3 m/s over 10-50 % of the ramp, is a release; loaded
+    at 1e-3 m/s it is a ramp. ramp_branch reads no branch where the interface's own elastic loading rate
+    (at weights 0.1-0.2 of the ramp) exceeds the slowest velocity it reads, BRANCH_VELOCITIES[0], and below
+    it takes that rate off exactly."""
+    cfg = make_config(**IDENTICAL, dead_weight=1.0, t_ramp=0.2, t_total=0.3)
+    t = np.arange(0, 301) * 1e-3
+    assert not is_release(cfg, t, 1e-3 * t) and is_release(cfg, t, 2e-3 * t)
+    assert is_release(cfg.with_updates(t_ramp=1e-3), t, 1e-3 * t)  # within two samples: at once
+    slip = np.where(t > 0.1, 1e-4 * (t - 0.1) ** 2 / 0.1, 0.0)  # the interface slips from mu_a = 0.5 on
+    for rate in (0.5 * BRANCH_VELOCITIES[0], 2.0 * BRANCH_VELOCITIES[0]):
+        b = ramp_branch(cfg, t, rate * t + slip, 0.01, float("nan"))
+        if rate < BRANCH_VELOCITIES[0]:
+            assert len(b) > 30 and np.allclose(b["v"] - b["v_slip"], rate, rtol=1e-9, atol=1e-15)
+        else:
+            assert len(b) == 0 and list(b.columns) == ["t", "mu", "v", "v_slip"]
 
 
 def test_the_onset_converges_to_the_analytic_maximum_as_the_ramp_slows():

@@ -45,6 +45,7 @@ ONSET_FACTOR = 3.0  # the runaway's onset: the velocity passes ONSET_FACTOR v0 1
 ONSET_CHECK = 10.0  # ...and, for comparison, this multiple
 ELASTIC_WEIGHTS = (0.1, 0.2)  # mu_a: where ramp_branch reads the interface's elastic loading rate (eq. (1) slips < 1e-7 m/s there)
 HELD_WINDOW = 0.2  # s: the last stretch of a record whose mean velocity says held (about one ring of the tester's top)
+BRANCH_VELOCITIES = (3e-5, 1e-4, 2e-4)  # m/s: where branch_summary reads mu(v), below every load's maximum
 OUTCOMES = ("steady", "held", "runaway", "undecided")  # run_outcome's values; the first two bound mu_max from below
 
 
@@ -57,20 +58,35 @@ def window_velocity(time: np.ndarray, x: np.ndarray, window: float) -> tuple[np.
     time, x = np.asarray(time, float), np.asarray(x, float)
     if time.size < 2:
         return np.zeros(0), np.zeros(0)
-    dt = float(np.median(np.diff(time)))
-    n = max(int(round(window / dt)), 1)
+    n = max(int(round(window / _interval(time))), 1)
     step = max(n // 2, 1)
     start = np.arange(0, time.size - n, step)
     w = time[start + n] - time[start]
     return 0.5 * (time[start] + time[start + n]), (x[start + n] - x[start]) / w
 
 
+def _sample_velocity(time: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The mean velocity over each sample interval, ``diff(x) / diff(time)`` (m/s; one shorter than the
+    record)."""
+    return np.diff(np.asarray(x, float)) / np.diff(np.asarray(time, float))
+
+
+def _interval(time: np.ndarray) -> float:
+    """The record's sample interval (s): the median of its time differences; NaN for fewer than two samples."""
+    return float(np.median(np.diff(np.asarray(time, float)))) if len(time) > 1 else float("nan")
+
+
+def _earliest(*times: float) -> float:
+    """The earliest of ``times`` that is finite; NaN if none is."""
+    finite = [t for t in times if np.isfinite(t)]
+    return min(finite) if finite else float("nan")
+
+
 def last_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
     """The end of the first sample interval after which the velocity over every sample stays above
     ``threshold`` (m/s): the last upward crossing, so early transients (a release's overshoot, the
     top's ringing) do not count. NaN if the record ends at or below it."""
-    time, x = np.asarray(time, float), np.asarray(x, float)
-    v = np.diff(x) / np.diff(time)
+    v = _sample_velocity(time, x)
     if v.size == 0 or v[-1] <= threshold:
         return float("nan")
     below = np.nonzero(v <= threshold)[0]
@@ -81,9 +97,24 @@ def last_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
 def first_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
     """The end of the first sample interval over which the velocity exceeds ``threshold`` (m/s); NaN if
     none does."""
-    v = np.diff(np.asarray(x, float)) / np.diff(np.asarray(time, float))
-    up = np.nonzero(v > threshold)[0]
+    up = np.nonzero(_sample_velocity(time, x) > threshold)[0]
     return float(time[up[0] + 1]) if up.size else float("nan")
+
+
+def is_release(cfg, time: np.ndarray, x: np.ndarray) -> bool:
+    """Whether a dead-weight run's weight came on too fast to read the rising branch or the runaway's onset
+    from its ramp: the weight at once (no ramp longer than two samples), or raised so fast that the top's
+    velocity from the slab's growing elastic shear alone (its median over 10-50 % of the ramp, ``x`` the
+    top's record ``X_mean``) exceeds half the onset threshold ONSET_FACTOR v0 10**delta (a release over
+    0.1-0.3 s: the threshold would be crossed by loading, not by sliding)."""
+    from ..model.system import dead_weight_ramp_time
+
+    ramp = dead_weight_ramp_time(cfg)
+    if ramp is None or not ramp > 2 * _interval(time):
+        return True
+    mid = (time > 0.1 * ramp) & (time <= 0.5 * ramp)
+    v = _sample_velocity(time, x)
+    return bool(mid[1:].any() and np.median(v[mid[1:]]) > 0.5 * ONSET_FACTOR * cfg.v0 * 10.0 ** cfg.delta)
 
 
 def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray | None = None) -> dict:
@@ -91,10 +122,8 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray 
     for one dead-weight run (its config and its ``X_mean`` record): ``mu_onset`` (ONSET_FACTOR),
     ``mu_onset_10`` (ONSET_CHECK), ``t_onset`` (s), ``during_ramp`` (the onset came while the weight still
     rose: otherwise mu_onset is the full weight, an upper bound of mu_max only) and ``resolution`` (the
-    weight's rise over one sample). NaN where the run does not run away or has no ramp to read: the
-    weight at once, or raised so fast that the top's velocity from the slab's growing elastic shear alone
-    (its median over 10-50 % of the ramp) exceeds half the threshold (a release over 0.1-0.3 s: the
-    threshold would be crossed by loading, not by sliding). With the interface's record ``x_interface`` (``x_mean``) also ``mu_slip`` and
+    weight's rise over one sample). NaN where the run does not run away or has no ramp to read
+    (:func:`is_release`). With the interface's record ``x_interface`` (``x_mean``) also ``mu_slip`` and
     ``t_slip``: where the interface first slips faster than ONSET_FACTOR v0 10**delta (from rest under a
     ramp there is no overshoot to skip): the end of the creep on the rising branch, a few samples before
     the top's reading (the heavy top answers the interface's first slip by ringing; under the heaviest
@@ -103,17 +132,15 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray 
     from ..model.system import dead_weight_ramp_time
 
     ramp = dead_weight_ramp_time(cfg)
-    interval = float(np.median(np.diff(time))) if len(time) > 1 else float("nan")
+    interval = _interval(time)
     nan = float("nan")
     out = {"mu_onset": nan, "mu_onset_10": nan, "t_onset": nan, "during_ramp": False, "resolution": nan,
            "mu_slip": nan, "t_slip": nan}
     if ramp is None or not ramp > 2 * interval:
         return out
-    scale = cfg.v0 * 10.0 ** cfg.delta
-    mid = (time > 0.1 * ramp) & (time <= 0.5 * ramp)
-    v = np.diff(x) / np.diff(time)
-    if mid[1:].any() and np.median(v[mid[1:]]) > 0.5 * ONSET_FACTOR * scale:
+    if is_release(cfg, time, x):
         return out  # the top's elastic loading alone is near the threshold: a release, not a slow ramp
+    scale = cfg.v0 * 10.0 ** cfg.delta
     t_on, t_10 = (last_crossing(time, x, k * scale) for k in (ONSET_FACTOR, ONSET_CHECK))
     t_slip = first_crossing(time, x_interface, ONSET_FACTOR * scale) if x_interface is not None else nan
 
@@ -134,7 +161,7 @@ def run_outcome(cfg, status: str, time: np.ndarray, x: np.ndarray) -> tuple[str,
     time, x = np.asarray(time, float), np.asarray(x, float)
     if time.size < 2:
         return ("steady" if status == "ok" else "runaway" if status == "runaway" else "undecided"), float("nan")
-    n = max(int(round(HELD_WINDOW / float(np.median(np.diff(time))))), 1)  # the window in whole samples
+    n = max(int(round(HELD_WINDOW / _interval(time))), 1)  # the window in whole samples
     j = max(time.size - 1 - n, 0)
     v_end = float((x[-1] - x[j]) / (time[-1] - time[j]))
     if status == "ok":
@@ -223,9 +250,11 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
         onset = runaway_onset(cfg, time, x, xi)
         onsets.append({**who, "outcome": outcome, "v_end": v_end, "velocity": float(ds.attrs.get("velocity", np.nan)),
                        "velocity_sem": float(ds.attrs.get("velocity_sem", np.nan)), **onset})
-        end = np.nanmin([onset["t_onset"], onset["t_slip"]]) if np.isfinite([onset["t_onset"], onset["t_slip"]]).any() else np.nan
-        branches.append(ramp_branch(cfg, time, xi, window, end).assign(**who))
-    return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets), pd.concat(branches, ignore_index=True)
+        if not is_release(cfg, time, x):  # a release's ramp traces the top's loading, not the branch
+            branches.append(ramp_branch(cfg, time, xi, window, _earliest(onset["t_onset"], onset["t_slip"])).assign(**who))
+    branch = (pd.concat(branches, ignore_index=True) if branches
+              else pd.DataFrame(columns=[*who, "t", "mu", "v", "v_slip"]))  # every run a release
+    return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets), branch
 
 
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
@@ -286,7 +315,10 @@ def ramp_branch(cfg, time: np.ndarray, x: np.ndarray, window: float, t_end: floa
     tester's 0.5-cm block, mu_a rising at 0.175 per second, is about 1.7e-3 m/s, ten times the creep; in
     steady sliding the two move together.) Where the weight rises slowly against the block's response the
     block follows its steady branch, so each point is a steady run's (mu, v) read without waiting for it;
-    the check is :func:`branch_check`. Empty without a ramp longer than two windows.
+    the check is :func:`branch_check`. Empty without a ramp longer than two windows, and where the weight
+    rose so fast that the interface's elastic loading rate (below) exceeds the slowest velocity
+    branch_summary reads, BRANCH_VELOCITIES[0] (3e-5 m/s; the tester's 6-s ramps load at about 1e-5 m/s,
+    theta = 0.05's 0.3-s release at about 2e-4).
 
     ``v_slip``: the velocity less the interface's elastic loading rate. Where only a fraction theta of the
     interface's sites carries a contact, the free sites move with the slab's growing shear, so the mean
@@ -300,7 +332,7 @@ def ramp_branch(cfg, time: np.ndarray, x: np.ndarray, window: float, t_end: floa
     if ramp is None or not ramp > 2 * window:
         return pd.DataFrame({"t": [], "mu": [], "v": [], "v_slip": []})
     t, v = window_velocity(time, x, window)
-    dt = float(np.median(np.diff(time)))
+    dt = _interval(time)
     half = 0.5 * max(int(round(window / dt)), 1) * dt  # the window's half length, as window_velocity rounds it
     end = min(t_end, ramp) if np.isfinite(t_end) else ramp
     keep = t + half <= end + 0.5 * dt
@@ -309,6 +341,8 @@ def ramp_branch(cfg, time: np.ndarray, x: np.ndarray, window: float, t_end: floa
     mu = cfg.dead_weight * (t + 0.5 * dt) / ramp
     low = (mu >= ELASTIC_WEIGHTS[0]) & (mu <= ELASTIC_WEIGHTS[1]) & (t + half <= ramp)
     v_el = float(np.median(v[low])) if low.any() else 0.0
+    if abs(v_el) > BRANCH_VELOCITIES[0]:  # loaded so fast that the slip would be a difference of like numbers
+        return pd.DataFrame({"t": [], "mu": [], "v": [], "v_slip": []})
     return pd.DataFrame({"t": t[keep], "mu": mu[keep], "v": v[keep], "v_slip": v[keep] - v_el})
 
 
@@ -322,7 +356,7 @@ def _last_passage(a: np.ndarray, b: np.ndarray, level: float) -> float:
     return float(b[i] + (level - a[i]) / (a[i + 1] - a[i]) * (b[i + 1] - b[i]))
 
 
-def _equal(column: pd.Series, value) -> np.ndarray:
+def rows_equal(column: pd.Series, value) -> np.ndarray:
     """Rows of a numeric ``column`` equal to ``value`` (np.isclose); NaN or None (an elastic run's
     temperature) equal to NaN or None."""
     col = pd.to_numeric(column, errors="coerce").to_numpy(dtype=float)
@@ -339,7 +373,7 @@ def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
     rows = []
     keys = ["N", "temperature", "theta", "seed"]
     for _, s in steady.iterrows():
-        same = branch[np.all([_equal(branch[k], s[k]) for k in keys], axis=0) & (branch["v_slip"] > 0)]
+        same = branch[np.all([rows_equal(branch[k], s[k]) for k in keys], axis=0) & (branch["v_slip"] > 0)]
         for mid, g in same.groupby("member_id"):
             v_ramp = float(np.exp(_last_passage(g["mu"].to_numpy(), np.log(g["v_slip"].to_numpy()), s["mu_a"])))
             if np.isfinite(v_ramp):
@@ -349,7 +383,6 @@ def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=[*keys, "mu_a", "v_steady", "v_steady_se", "ramp_member", "rate", "v_ramp", "ratio"])
 
 
-BRANCH_VELOCITIES = (3e-5, 1e-4, 2e-4)  # m/s: where branch_summary reads mu(v), below every load's maximum
 
 
 def branch_summary(branch: pd.DataFrame, velocities: tuple[float, ...] = BRANCH_VELOCITIES) -> pd.DataFrame:
@@ -390,6 +423,6 @@ def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
 
 
 __all__ = ["BRACKET_KEYS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR",
-           "OUTCOMES", "branch_check", "branch_summary", "first_crossing", "last_crossing", "loading_rate", "onset_summary",
-           "protocol_brackets", "ramp_branch", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
+           "OUTCOMES", "branch_check", "branch_summary", "first_crossing", "is_release", "last_crossing", "loading_rate", "onset_summary",
+           "protocol_brackets", "ramp_branch", "rows_equal", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
            "window_velocity"]

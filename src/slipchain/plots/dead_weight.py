@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ..analysis.statistics import ratios_to_first
+from ..analysis.traces import rows_equal
 from ..tester.analysis import OK, RUNAWAY, pressure_group
 from .common import pyplot, save_figure
 
@@ -150,36 +151,44 @@ STATUS_STYLE = {"steady": "-", "runaway": "--", "held": ":", "undecided": "-."} 
 
 
 def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: float, out: str | os.PathLike) -> list[Path]:
-    """The top's velocity against time, one panel per theta, one line per run coloured by its applied
-    mu_a, styled by its outcome (:func:`slipchain.analysis.traces.run_outcome`: solid steady, dashed
-    runaway, dotted held, dash-dotted undecided); the decision's start (t_decide) and the ramp's end as vertical lines. The velocity axis
-    is symmetric-logarithmic (linear within 1e-5 m/s of zero): the release's overshoot, the creep and
-    the ringing through zero on one axis. Each runaway's onset read during the ramp (``onsets``) is a black
-    dot at its time. ``traces``, ``onsets``: :func:`slipchain.analysis.traces.velocity_traces`."""
+    """The top's velocity against time, one panel per theta (a row of panels per release time t_ramp where
+    the runs have several, so that one weight's colour means one run per panel), one line per run coloured
+    by its applied mu_a, styled by its outcome (:func:`slipchain.analysis.traces.run_outcome`: solid
+    steady, dashed runaway, dotted held, dash-dotted undecided); the decision's start (t_decide) and the
+    ramp's end as vertical lines. The velocity axis is symmetric-logarithmic (linear within 1e-5 m/s of
+    zero): the release's overshoot, the creep and the ringing through zero on one axis. Each runaway's
+    onset read during the ramp (``onsets``) is a black dot at its time. ``traces``, ``onsets``:
+    :func:`slipchain.analysis.traces.velocity_traces`."""
     plt = pyplot()
     thetas = sorted(traces["theta"].unique())
-    fig, axes = plt.subplots(1, len(thetas), figsize=(4.0 * len(thetas) + 1.6, 4.2), sharey=True, squeeze=False)
+    ramps = sorted(traces.groupby("t_ramp", dropna=False).groups)
+    fig, axes = plt.subplots(len(ramps), len(thetas), figsize=(4.0 * len(thetas) + 1.6, 0.4 + 3.8 * len(ramps)),
+                             sharey=True, squeeze=False)
     weights = sorted(traces["mu_a"].unique())
     cmap = plt.cm.plasma(np.linspace(0.0, 0.85, max(len(weights), 2)))
     colors = dict(zip(weights, cmap))
     outcome = dict(zip(onsets["member_id"], onsets["outcome"]))
-    for ax, th in zip(axes[0], thetas):
-        cur = traces[np.isclose(traces["theta"], th)]
-        for (mu_a, _seed, _id), g in cur.groupby(["mu_a", "seed", "member_id"]):
-            ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE[outcome[_id]], lw=1.0)
-        on = onsets[np.isclose(onsets["theta"], th) & onsets["during_ramp"].astype(bool)]
-        for _, r in on.iterrows():
-            g = cur[cur["member_id"] == r["member_id"]]
-            ax.plot(r["t_onset"], np.interp(r["t_onset"], g["t"], g["v"]), "o", color="k", ms=3, zorder=5)
-        for key, style in (("t_decide", ":"), ("t_ramp", "--")):
-            for value in cur[key].dropna().unique():
-                if value > 2 * window:  # a ramp within the first window is the weight at once
-                    ax.axvline(value, color="0.6", ls=style, lw=0.8)
-        ax.set_yscale("symlog", linthresh=1e-5)
-        ax.axhline(0.0, color="0.8", lw=0.6)
-        ax.set_xlabel("time (s)")
-        ax.set_title(rf"$\theta$ = {th:g}", fontsize=9)
-    axes[0][0].set_ylabel(f"velocity of the top over {window * 1e3:g} ms (m/s)")
+    for row, t_ramp in zip(axes, ramps):
+        for ax, th in zip(row, thetas):
+            cur = traces[np.isclose(traces["theta"], th) & rows_equal(traces["t_ramp"], t_ramp)]
+            for (mu_a, _seed, _id), g in cur.groupby(["mu_a", "seed", "member_id"]):
+                ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE[outcome[_id]], lw=1.0)
+            on = onsets[np.isclose(onsets["theta"], th) & rows_equal(onsets["t_ramp"], t_ramp)
+                        & onsets["during_ramp"].astype(bool)]
+            for _, r in on.iterrows():
+                g = cur[cur["member_id"] == r["member_id"]]
+                ax.plot(r["t_onset"], np.interp(r["t_onset"], g["t"], g["v"]), "o", color="k", ms=3, zorder=5)
+            for key, style in (("t_decide", ":"), ("t_ramp", "--")):
+                for value in cur[key].dropna().unique():
+                    if value > 2 * window:  # a ramp within the first window is the weight at once
+                        ax.axvline(value, color="0.6", ls=style, lw=0.8)
+            ax.set_yscale("symlog", linthresh=1e-5)
+            ax.axhline(0.0, color="0.8", lw=0.6)
+            ax.set_xlabel("time (s)")
+            release = "" if len(ramps) == 1 else (", weight at once" if pd.isna(t_ramp) or not t_ramp > 2 * window
+                                                  else f", released over {t_ramp:g} s")
+            ax.set_title(rf"$\theta$ = {th:g}{release}", fontsize=9)
+        row[0].set_ylabel(f"velocity of the top over {window * 1e3:g} ms (m/s)")
     Line2D = plt.matplotlib.lines.Line2D
     handles = [Line2D([], [], color=colors[w], label=rf"$\mu_a$ = {w:g}") for w in weights]
     handles += [Line2D([], [], color="0.3", ls=ls, label=label) for ls, label in
@@ -187,7 +196,7 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     handles += [Line2D([], [], color="0.6", ls=":", lw=0.8, label="decision from"),
                 Line2D([], [], color="0.6", ls="--", lw=0.8, label="ramp's end"),
                 Line2D([], [], marker="o", ls="none", color="k", ms=3, label="runaway's onset")]
-    fig.subplots_adjust(right=1.0 - 1.5 / fig.get_figwidth())
+    fig.subplots_adjust(right=1.0 - 1.5 / fig.get_figwidth(), hspace=0.35)
     fig.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1.0 - 1.45 / fig.get_figwidth(), 0.5),
                frameon=False)
     fig.suptitle("The hanging weight's pull read as a tester's distance record: velocity against time", fontsize=10)
@@ -206,15 +215,15 @@ def plot_branches(branch: pd.DataFrame, onsets: pd.DataFrame, out: str | os.Path
     thetas = sorted(branch["theta"].unique())
     colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0.0, 0.9, max(len(thetas), 2)))))
     for ax, (n, temp) in zip(axes[0], groups):
-        cur = branch[(branch["N"] == n) & ((branch["temperature"] == temp) | (pd.isna(temp) & branch["temperature"].isna()))]
+        cur = branch[rows_equal(branch["N"], n) & rows_equal(branch["temperature"], temp)]
         for (th, _id), g in cur.groupby(["theta", "member_id"]):
             g = g[g["v_slip"] > 0]
             ax.plot(g["v_slip"], g["mu"], color=colors[th], lw=0.8, alpha=0.8)
             on = onsets[(onsets["member_id"] == _id) & onsets["during_ramp"].astype(bool)]
             if len(on) and len(g):
                 ax.plot(g["v_slip"].iloc[-1], g["mu"].iloc[-1], "o", color="k", ms=3, zorder=5)
-        same = onsets[(onsets["N"] == n) & (onsets["outcome"] == "steady") & onsets["velocity"].notna()
-                      & ((onsets["temperature"] == temp) | (pd.isna(temp) & onsets["temperature"].isna()))]
+        same = onsets[rows_equal(onsets["N"], n) & rows_equal(onsets["temperature"], temp) & (onsets["outcome"] == "steady")
+                      & onsets["velocity"].notna()]
         for _, r in same.iterrows():
             ax.plot(r["velocity"], r["mu_a"], "o", mfc="none", mec=colors.get(r["theta"], "0.3"), ms=6, zorder=6)
         ax.set_xscale("log")

@@ -138,7 +138,8 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
     traces.csv (one row per window), onsets.csv (one row per run), mu_max.csv
     (:func:`~slipchain.analysis.traces.onset_summary`), brackets.csv (each protocol's bracket on mu_max
     from its steady, held and runaway weights: :func:`~slipchain.analysis.traces.protocol_brackets`), and
-    for slowly loaded runs the rising branch their ramps traced (branch.csv, the branches figure) checked
+    where some runs were loaded slowly (not at once or in a release:
+    :func:`~slipchain.analysis.traces.is_release`) the rising branch their ramps traced (branch.csv, the branches figure) checked
     against the steady runs (branch_check.csv) and read at fixed velocities (branch_mu.csv:
     :func:`~slipchain.analysis.traces.branch_summary`); returns the paths, a line on that check, one line per group
     of mu_max.csv and one per bracket."""
@@ -156,10 +157,11 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
     paths += [write_csv(frame, Path(out) / "traces.csv", float_format="%.6g"),
               write_csv(onsets, Path(out) / "onsets.csv", float_format="%.6g"),
               write_csv(summary, Path(out) / "mu_max.csv", float_format="%.6g"),
-              write_csv(brackets, Path(out) / "brackets.csv", float_format="%.6g"),
-              write_csv(branch, Path(out) / "branch.csv", float_format="%.6g"),
-              write_csv(check, Path(out) / "branch_check.csv", float_format="%.6g"),
-              write_csv(at_v, Path(out) / "branch_mu.csv", float_format="%.6g")]
+              write_csv(brackets, Path(out) / "brackets.csv", float_format="%.6g")]
+    if len(branch):  # none where every run's weight came on at once or in a release
+        paths += [write_csv(branch, Path(out) / "branch.csv", float_format="%.6g"),
+                  write_csv(check, Path(out) / "branch_check.csv", float_format="%.6g"),
+                  write_csv(at_v, Path(out) / "branch_mu.csv", float_format="%.6g")]
     lines = []
     if len(check):
         r = check["ratio"]
