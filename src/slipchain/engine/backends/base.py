@@ -19,6 +19,7 @@ from ...model.geometries import geometry_of
 from ...results.observables import SLOW_FRACTION
 from .. import scheme as S
 
+N_CONTROL = 7  # Batch.step_control's columns (.compose's CTRL_ names the last three)
 N_CARRY = 4  # Batch.carry's head: level, have (an error estimate's memory), wait, back-off (.compose's CT_ columns 1, 3, 4, 5)
 
 
@@ -29,10 +30,10 @@ class Batch:
     ``geometry`` and ``shape`` = (Lx, Ly) are the batch's (all rows share them); ``kernel`` holds
     a**2 k(q) on the rfft2 grid of each row, (B, Lx, Ly//2 + 1), for 'slab' and 'halfspace'.
     With integrator = 'adaptive' (all rows or none), ``folds`` (B, levels + 1, 2, C) holds each
-    contact's folds at dt * 2**k and ``step_control`` (B, 6) the tolerance in m/s (step_tol*v_d),
+    contact's folds at dt * 2**k and ``step_control`` (B, N_CONTROL) the tolerance in m/s (step_tol*v_d),
     the number of doublings, counts of the steps taken and rejected (:mod:`.adaptive`), the implicit
-    stepper's top level (integrator = 'implicit'; the number of doublings otherwise) and the last
-    step's error estimate (:mod:`.compose`).
+    stepper's top level (integrator = 'implicit'; the number of doublings otherwise), the last
+    step's error estimate (:mod:`.compose`) and the implicit stepper's energy tolerance (energy_tol).
     """
 
     x: np.ndarray
@@ -96,7 +97,7 @@ class Batch:
         ysolve = np.zeros((b, S.N_YS, cmax))
         levels = max(s.config.step_levels for s in systems) if adaptive else 0
         folds = np.zeros((b, levels + 1, 2, cmax)) if adaptive else None
-        step_control = np.zeros((b, 6)) if adaptive else None
+        step_control = np.zeros((b, N_CONTROL)) if adaptive else None
         for r, s in enumerate(systems):
             params[r] = kernel_params(s)
             c = s.n_contacts
@@ -117,7 +118,7 @@ class Batch:
             if adaptive:
                 cf = s.config
                 top = cf.implicit_levels if cf.integrator == "implicit" else cf.step_levels
-                step_control[r] = cf.step_tol * cf.v_d, cf.step_levels, 0.0, 0.0, top, 0.0
+                step_control[r] = cf.step_tol * cf.v_d, cf.step_levels, 0.0, 0.0, top, 0.0, cf.energy_tol
                 folds[r, :, 0], folds[r, :, 1] = np.inf, -np.inf
                 for k in range(cf.step_levels + 1):
                     h = cf.dt * 2.0**k

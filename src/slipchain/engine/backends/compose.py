@@ -64,7 +64,7 @@ from . import implicit, spectral, viscoelastic
 from .pocketfft import fft_module, numba_fft
 from .adaptive import (STEP_UP, _copy_solver_state, _error, _grid_level, _keep_acceleration, _load_folds,
                        _rejected_level, _weighted_contact_sums)
-from .base import N_CARRY, Batch, ChunkOutput
+from .base import N_CARRY, N_CONTROL, Batch, ChunkOutput
 from .cpu import _contact_sums, _contacts, _end_sample, _refresh_solver, lattice_commit, lattice_explicit, row_parameters
 
 # ctl columns: the row's place in its output sample; the implicit stepper's back-off (explicit steps
@@ -86,10 +86,10 @@ MIN_GAIN = 3
 # which then wait 1, 2, 4, ... MAX_BACKOFF explicit steps (doubling within a sample) before the next try.
 # Counted, not timed: the choice, hence the result, is the same on every machine and after a resume.
 KRYLOV_TRY_UNITS = 6.0
-# control columns (Batch.step_control): tolerance (m/s), the adaptive step's top level, steps accepted, rejected,
-# the implicit stepper's top level (:mod:`.implicit`), the last accepted step's error estimate
-CTRL_TOP_IMPLICIT, CTRL_ERR = 4, 5
-N_CONTROL = 6
+# control columns (Batch.step_control, N_CONTROL of them): tolerance (m/s), the adaptive step's top level, steps
+# accepted, rejected, the implicit stepper's top level (:mod:`.implicit`), the last accepted step's error estimate,
+# the implicit stepper's energy tolerance (Config.energy_tol: a step's energy residual at most this fraction of its works)
+CTRL_TOP_IMPLICIT, CTRL_ERR, CTRL_ENERGY = 4, 5, 6
 
 
 def fixed_stepper(explicit, commit, fastmath: bool):
@@ -263,7 +263,8 @@ def implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
     most, where a failed try backs off)."""
     tol = ctrl[0]
     top_explicit = int(ctrl[1])
-    if its < 0 or err > tol or abs(bal) > implicit.ENERGY_TOL * scale:
+    energy_tol = ctrl[CTRL_ENERGY]
+    if its < 0 or err > tol or abs(bal) > energy_tol * scale:
         # rejected: finer (down to the explicit top, the adaptive step's levels); an energy residual
         # (numerical dissipation, ~ h) one level down
         ctrl[3] += 1.0
@@ -283,7 +284,7 @@ def implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
     # up while both the error and the energy residual (~ h) leave room for a doubling
     if cut:  # a step cut short says nothing about the next full one: the level is kept
         pass
-    elif cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * implicit.ENERGY_TOL * scale \
+    elif cr[CT_HAVE] > 0 and err < STEP_UP * tol and abs(bal) < 0.5 * energy_tol * scale \
             and lv < int(ctrl[CTRL_TOP_IMPLICIT]):
         lv += 1
     elif lv < top_explicit + MIN_GAIN:  # stuck within a few doublings of the explicit top: explicit is cheaper

@@ -46,7 +46,7 @@ drive force are taken by the trapezoidal rule between its start and end (:func:`
 right-end rule errs by h/2 times the change of the power per step). Backward Euler's numerical
 dissipation per step, 1/2 (dv^T M dv + dq^T K dq), is no work term; it is the step's **energy
 residual** (the change of :func:`chain_energy` minus the works), and a step is accepted only if it
-is at most ENERGY_TOL of the magnitudes of the step's works (else it is taken again one level
+is at most ``energy_tol`` (default ENERGY_TOL = 1e-4) of the magnitudes of the step's works (else it is taken again one level
 down): where the blocks ring (steady sliding at epsilon = 1e-2) backward Euler would otherwise damp
 their oscillations numerically instead of by the pair damping and the contacts (docs/numerics.md,
 "The implicit stepper"). A try that falls back to the explicit levels makes the stepper wait 1, 2,
@@ -72,6 +72,7 @@ import math
 import numba as nb
 import numpy as np
 
+from ...model.config import ENERGY_TOL
 from ...model.elastic import twoport_energy
 from .cpu import scaled_exp
 from .viscoelastic import bulk_forces, combined_fields
@@ -85,7 +86,8 @@ NEWTON_DY = 1e-6  # converged: every contact's last update below this (decades; 
 NEWTON_DV = 1e-4  # ... and every other block's below this times the tolerance (m/s)
 MAX_DY = 2.0  # largest change of a contact's y in one Newton iteration (decades)
 Y_FLOOR = -40.0  # y of a contact whose velocity the update puts at exactly zero
-ENERGY_TOL = 1e-4  # a step's energy residual (trapezoidal works) at most this fraction of its works (module docstring)
+# ENERGY_TOL: a step's energy residual (trapezoidal works) at most this fraction of its works (module docstring),
+# the default of Config.energy_tol, which the controller reads from the batch's step control (compose.CTRL_ENERGY)
 
 
 @nb.njit(fastmath=FASTMATH, error_model="numpy")
