@@ -121,7 +121,7 @@ CATALOGUE: dict[str, Study] = {
                                    "mu_max at the runaway's onset on 32 x 32, seeds 1 and 2, every load"),
     "tester-onset-128": Study("study", 4, "1 of 4 run (theta = 1: 9 818 s on one Zen 5 core, partly beside 2 sweeps); the others: tester-onset-128-etol",
                               "docs/tester-3d/index.md", "mu_max at the runaway's onset on 128 x 128, every load (seed 0)"),
-    "tester-onset-32-etol": Study("study", 4, "not yet measured (tester-onset-32-seeds: 231-596 s a run)", "docs/tester-3d/index.md",
+    "tester-onset-32-etol": Study("study", 4, "15 core-minutes (160-376 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                   "tester-onset-32-seeds' seed 1 with energy_tol = 1e-3: the onset where the default puts it?"),
     "tester-onset-128-etol": Study("study", 3, "not yet measured (tester-onset-128 at theta = 1: 9 818 s with the default energy_tol)",
                                    "docs/tester-3d/index.md", "tester-onset-128's lighter loads with energy_tol = 1e-3 (seed 0)"),
