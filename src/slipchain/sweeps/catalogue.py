@@ -123,7 +123,7 @@ CATALOGUE: dict[str, Study] = {
                               "docs/tester-3d/index.md", "mu_max at the runaway's onset on 128 x 128, every load (seed 0)"),
     "tester-onset-32-etol": Study("study", 4, "15 core-minutes (160-376 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                   "tester-onset-32-seeds' seed 1 with energy_tol = 1e-3: the onset where the default puts it?"),
-    "tester-onset-32-short": Study("study", 4, "not yet measured (tester-onset-32-etol: 160-376 s a run)", "docs/tester-3d/index.md",
+    "tester-onset-32-short": Study("study", 4, "11 core-minutes (84-305 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                    "tester-onset-32-etol with the ramp cut short (to 0.98 over 5.6 s, decided from 5.65 s): the same onset, less runaway?"),
     "tester-onset-128-etol": Study("study", 3, "not yet measured (tester-onset-128 at theta = 1: 9 818 s with the default energy_tol and the full ramp)",
                                    "docs/tester-3d/index.md", "tester-onset-128's lighter loads with energy_tol = 1e-3 and the ramp cut short (seed 0)"),
