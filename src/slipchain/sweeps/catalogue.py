@@ -127,6 +127,8 @@ CATALOGUE: dict[str, Study] = {
                                    "tester-onset-32-etol with the ramp cut short (to 0.98 over 5.6 s, decided from 5.65 s): the same onset, less runaway?"),
     "tester-onset-128-etol": Study("study", 3, "not yet measured (tester-onset-128 at theta = 1: 9 818 s with the default energy_tol and the full ramp)",
                                    "docs/tester-3d/index.md", "tester-onset-128's lighter loads with energy_tol = 1e-3 and the ramp cut short (seed 0)"),
+    "tester-onset-128-seeds": Study("study", 8, "not yet measured (tester-onset-128-etol's cost a run)", "docs/tester-3d/index.md",
+                                    "tester-onset-128-etol for seeds 1 and 2 at every load"),
     "tester-onset-32-11c": Study("study", 4, "27 core-minutes (235-716 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                  "mu_max at the runaway's onset on 32 x 32 at Fig. 3's 11 °C, every load (seed 0)"),
     "tester-onset-64-low": Study("study", 2, "58 core-minutes (1 476 and 1 992 s; a Zen 5 EPYC)", "docs/tester-3d/index.md",
