@@ -22,12 +22,10 @@ eta_c = 0.1 omega0, v_d = v0, steady start), where low load's steps are bounded 
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 
-from bench_preconditioner import COUNTS, _counting, _cpu, _result
-from slipchain import run
+from bench_preconditioner import _counting, _cpu, _result, alternating
 from slipchain.engine.backends import compose
 
 
@@ -50,17 +48,8 @@ def main() -> None:
         cfg = dict(geometry="slab", N=args.L, Ly=args.L, N_L=5, theta=args.theta, eta_c=1e5, v_d=1e-3, start="steady",
                    dt=1e-7, epsilon=1.0, seed=0, output_interval=1e-3, t_total=args.t, integrator="implicit")
     tols = args.energy_tol
-    for e in tols:  # compile
-        run(dict(cfg, energy_tol=e, t_total=4e-3) if args.fig6 else dict(cfg, energy_tol=e, t_total=4e-3, t_ramp=2e-3))
-    walls: dict[float, list[float]] = {e: [] for e in tols}
-    last = {}
-    for _ in range(args.repeat):
-        for e in tols:
-            COUNTS.clear()
-            t0 = time.perf_counter()
-            ds = run(dict(cfg, energy_tol=e))
-            walls[e].append(time.perf_counter() - t0)
-            last[e] = (ds, np.array(COUNTS).reshape(-1, 2))
+    walls, last = alternating(cfg, "energy_tol", tols, args.repeat,
+                              dict(t_total=4e-3) if args.fig6 else dict(t_total=4e-3, t_ramp=2e-3))
     what = ("Fig. 6's slab (v_d = v0, steady start)" if args.fig6 else
             f"the tester's block, the weight rising {args.rate:.4g}/s from rest")
     print(f"{_cpu()}; {what}, {args.L} x {args.L}, theta = {args.theta}, {args.t} s simulated, "

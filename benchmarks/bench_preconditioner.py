@@ -51,6 +51,24 @@ def _result(ds) -> str:
     return f"mu_star {float(ds.attrs['mu_star']):.6f}"
 
 
+def alternating(cfg: dict, key: str, values, repeat: int, short: dict) -> tuple[dict, dict]:
+    """Run ``cfg`` with ``key`` at each of ``values``: once each with ``short`` (to compile), then
+    ``repeat`` times alternating; returns the wall times per value and its last (dataset, backward-Euler
+    tries' (Newton, conjugate-gradient) iterations)."""
+    for value in values:
+        run(dict(cfg, **{key: value}, **short))
+    walls: dict = {v: [] for v in values}
+    last: dict = {}
+    for _ in range(repeat):
+        for value in values:
+            COUNTS.clear()
+            t0 = time.perf_counter()
+            ds = run(dict(cfg, **{key: value}))
+            walls[value].append(time.perf_counter() - t0)
+            last[value] = (ds, np.array(COUNTS).reshape(-1, 2))
+    return walls, last
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--L", type=int, default=64)
@@ -68,19 +86,8 @@ def main() -> None:
         cfg.update(N_L=50, material="prony", temperature=20.0, dead_weight=args.tester, top_mass="tester", start="rest",
                    t_ramp=args.t_ramp, dt=5e-8)
     names = ("jacobi", "additive")
-    for name in names:  # compile
-        run(dict(cfg, krylov_preconditioner=name, t_total=2e-3, t_ramp=1e-3) if args.tester is not None
-            else dict(cfg, krylov_preconditioner=name, t_total=2e-3))
-    walls: dict[str, list[float]] = {n: [] for n in names}
-    last = {}
-    for _ in range(args.repeat):
-        for name in names:
-            COUNTS.clear()
-            t0 = time.perf_counter()
-            ds = run(dict(cfg, krylov_preconditioner=name))
-            walls[name].append(time.perf_counter() - t0)
-            its = np.array(COUNTS).reshape(-1, 2)
-            last[name] = (ds, its)
+    short = dict(t_total=2e-3, t_ramp=1e-3) if args.tester is not None else dict(t_total=2e-3)
+    walls, last = alternating(cfg, "krylov_preconditioner", names, args.repeat, short)
     what = (f"the tester's block, mu_a = {args.tester}, ramp {args.t_ramp} s" if args.tester is not None
             else f"v_d = {args.v_d:g}")
     print(f"{_cpu()}; slab {args.L} x {args.L}, theta = {args.theta}, {what}, "
