@@ -55,6 +55,12 @@ CASES = {
     # the automatic dead-weight length: 50 one-sample ramp chunks, first decision at t_decide (save 53),
     # cut after save 60 while it still drifts, on to t_max
     "dead weight, automatic length": dict(N=31, theta=0.5, dead_weight=0.7, t_decide=2e-3, t_max=0.01, seed=1),
+    # stop_at_runaway: identical contacts loaded over 0.1 s to 1.2 times eq. (1)'s maximum (1.0002): the onset at
+    # 0.083 s, the certain runaway at 0.093 s; one-sample ramp chunks, so the crash after save 88 falls between
+    # them, and the resumed run must see the record's last 20 ms (its history restored as one array)
+    "dead weight, stop at runaway": dict(N=11, theta=1.0, delta=0.0, start="rest", dead_weight=1.2003,
+                                         t_ramp=0.1, t_decide=0.11, t_max=0.2, output_interval=1e-3,
+                                         stop_at_runaway=True),
     # issue 13: the 2-D chains and the slab (FFT loop) resume bit for bit too
     "chain2d": dict(N=8, Ly=6, geometry="chain2d", theta=0.5, t_total=2.5e-3, seed=2),
     "slab": dict(N=8, Ly=6, geometry="slab", theta=0.5, t_total=2.5e-3, seed=2),
@@ -74,7 +80,7 @@ CASES = {
                                     epsilon=1.0, start="steady", t_total=0.03, output_interval=1e-3, seed=3,
                                     krylov_preconditioner="additive"),
 }
-SAVES = {"dead weight, automatic length": 60}
+SAVES = {"dead weight, automatic length": 60, "dead weight, stop at runaway": 88}
 
 
 @pytest.mark.parametrize("case", CASES)

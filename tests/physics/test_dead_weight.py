@@ -85,3 +85,54 @@ def test_the_testers_top_is_the_load_and_the_hanging_weight():
                      (dict(top_mass="tester", geometry="chain2d"), "top_mass")):
         with pytest.raises(ConfigError, match=f"config key '{key}'"):
             make_config(**{**base, **bad})
+
+
+def test_certain_runaway_reads_both_halves_of_the_last_stretch():
+    """certain_runaway on records of exact velocities (v0 10**delta = 1e-3 m/s: the branch's bound
+    RUNAWAY_FACTOR v0 10**delta = 0.01 m/s): beyond it over both halves of the last RUNAWAY_WINDOW and
+    faster over the second, a runaway; decelerating, or below the bound over the first half, or a record
+    shorter than half the window, not."""
+    from slipchain.results.schema import RUNAWAY_WINDOW, certain_runaway
+
+    cfg = make_config(N=11, theta=1.0, delta=0.0, dead_weight=1.0, t_decide=0.2, t_max=0.3, stop_at_runaway=True)
+    t = np.arange(1, 4001) * 1e-5  # 40 ms: the window is the last 20 ms
+    last = t > t[-1] - RUNAWAY_WINDOW
+
+    def record(v_first, v_second):
+        v = np.where(t <= t[-1] - 0.5 * RUNAWAY_WINDOW, v_first, v_second)
+        return np.cumsum(v * 1e-5)
+
+    assert "0.015 -> 0.03 m/s" in certain_runaway(cfg, t, record(0.015, 0.03))
+    assert certain_runaway(cfg, t, record(0.03, 0.015)) is None  # slowing down
+    assert certain_runaway(cfg, t, record(0.005, 0.05)) is None  # not yet beyond the branch over the first half
+    assert certain_runaway(cfg, t[-500:], record(0.015, 0.03)[-500:]) is None  # 5 ms: too short to say
+    assert last.sum() == 2000
+
+
+def test_stop_at_runaway_ends_the_run_soon_after_the_onset_with_the_same_record():
+    """Identical contacts loaded over 0.1 s to 1.2 times eq. (1)'s maximum: with stop_at_runaway the run
+    stops at the certain runaway, within RUNAWAY_WINDOW of the onset (measured 10 ms here; on the tester's
+    32 x 32 block 33 ms, against the 0.13 s the decision from t_decide took; docs/tester-3d), classified
+    runaway; its record is
+    the full run's up to there, bit for bit, so the onset read from it is the same."""
+    from slipchain.analysis.traces import runaway_onset
+    from slipchain.workflows.dead_weight import single_contact_maximum
+
+    ident = dict(N=11, theta=1.0, delta=0.0, start="rest")
+    f_max, _ = single_contact_maximum(make_config(**ident, t_total=5e-3))
+    cfg = dict(ident, dead_weight=1.2 * f_max, t_ramp=0.1, t_decide=0.11, t_max=0.2, output_interval=1e-5)
+    full, short = run(cfg), run(dict(cfg, stop_at_runaway=True))
+    assert full.attrs["velocity_status"] == short.attrs["velocity_status"] == "runaway"
+    assert "stop_at_runaway" in short.attrs["velocity_reason"] and full.time.values[-1] >= 0.11 - 1e-9
+    n = short.time.size
+    for v in ("X_mean", "x_mean", "f_d"):
+        assert np.array_equal(full[v].values[:n], short[v].values), v
+    ons = [runaway_onset(make_config(**c), ds.time.values, ds.X_mean.values, ds.x_mean.values)
+           for c, ds in ((cfg, full), (dict(cfg, stop_at_runaway=True), short))]
+    assert ons[0]["during_ramp"] and ons[0]["t_onset"] < short.time.values[-1] < ons[0]["t_onset"] + 0.02
+    for key in ("mu_onset", "mu_onset_10", "mu_slip"):
+        assert ons[0][key] == ons[1][key], key
+    with pytest.raises(Exception, match="stop_at_runaway.*unless dead_weight and t_decide"):
+        make_config(**ident, dead_weight=0.5, t_total=0.1, stop_at_runaway=True)
+    assert member_id(make_config(**cfg)) == member_id(make_config(**cfg, stop_at_runaway=False))
+    assert "stop_at_runaway" not in make_config(**cfg).to_toml()

@@ -20,7 +20,8 @@ import numpy as np
 from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import count_cycles, steady_estimate, window_velocity
-from ..results.schema import Status, accelerating_beyond_branch, after_ramp, dead_weight_velocity, velocity_decided
+from ..results.schema import (RUNAWAY_WINDOW, Status, accelerating_beyond_branch, after_ramp, certain_runaway,
+                              dead_weight_velocity, velocity_decided)
 from . import scheme as S
 
 DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace each time it has grown by 2 %
@@ -168,9 +169,17 @@ class UntilDecided:
     reached: bool = False
 
     def decided(self, n_done: int, out_row: np.ndarray) -> bool:
-        """Append one chunk's samples; say whether the velocity is decided (``n_done`` samples so far)."""
+        """Append one chunk's samples; say whether the velocity is decided (``n_done`` samples so far).
+        Before t_decide, with config ``stop_at_runaway``, decided where the record's last stretch shows a
+        certain runaway (:func:`~slipchain.results.schema.certain_runaway`), checked after every chunk
+        (a sample at a time while the weight rises)."""
         self.X_mean.append(out_row[:, S.O_XUMEAN])
-        if n_done < self.n_first or self._check_index(n_done) == self._check_index(n_done - out_row.shape[0]):
+        if n_done < self.n_first:
+            if self.system.config.stop_at_runaway and self._runaway(n_done):
+                self.reached = True
+                return True
+            return False
+        if self._check_index(n_done) == self._check_index(n_done - out_row.shape[0]):
             return False
         time = (np.arange(n_done) + 1) * self.interval
         X = np.concatenate(self.X_mean)
@@ -179,6 +188,19 @@ class UntilDecided:
         self.reached = velocity_decided(status, fit) or accelerating_beyond_branch(self.system, time[after], X[after],
                                                                                   fit)
         return self.reached
+
+    def _runaway(self, n_done: int) -> bool:
+        """certain_runaway on the record's last RUNAWAY_WINDOW (the chunks that hold it, from the end)."""
+        need = int(np.ceil(RUNAWAY_WINDOW / self.interval)) + 1
+        parts, have = [], 0
+        for part in reversed(self.X_mean):
+            parts.append(part)
+            have += part.size
+            if have >= need:
+                break
+        X = np.concatenate(parts[::-1])
+        time = (np.arange(n_done - X.size, n_done) + 1) * self.interval
+        return certain_runaway(self.system.config, time, X) is not None
 
     def _check_index(self, n: int) -> int:
         """Checks fall at n_first*(1 + DECIDE_EVERY)**k: a chunk end checks when it passes the next one."""

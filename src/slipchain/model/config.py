@@ -63,6 +63,8 @@ ALLOWED: dict[str, str] = {
                     "t_max, absent with t_total or dead_weight",
     "t_decide": "a number > 0 (s), less than t_max, only with dead_weight and without t_total; or absent",
     "t_ramp": "a number > 0 (s), only with dead_weight, shorter than t_decide (else than the run); or absent",
+    "stop_at_runaway": "true or false (only with dead_weight and t_decide: stop before t_decide once the slider "
+                       "has run away for good, its velocity over the last 20 ms beyond 10 v0 10**delta and rising)",
     "sem_target": "a number > 0",
     "output_interval": "a number > 0 (s), at least dt",
     "seed": "an integer >= 0",
@@ -95,10 +97,11 @@ LEGACY_KEYS: dict[str, str] = {
 # t_max_cycles: 0 (no extension past t_max) until issue 26 made the automatic length follow slip cycles.
 # krylov_preconditioner: 'jacobi', the implicit stepper's only preconditioner on the slab before it existed.
 # energy_tol: ENERGY_TOL, the implicit stepper's fixed energy tolerance before it was a key.
+# stop_at_runaway: False, a dead-weight run went on to t_decide before it existed.
 ENERGY_TOL = 1e-4
 OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0,
                        "t_max_cycles": 0.0, "material": "elastic", "krylov_preconditioner": "jacobi",
-                       "energy_tol": ENERGY_TOL}
+                       "energy_tol": ENERGY_TOL, "stop_at_runaway": False}
 _NOT_OFF = object()
 
 # The adaptive step's largest step stays below this fraction of the stable step (Config.dt_stable).
@@ -153,6 +156,11 @@ class Config(BaseModel):
     ``krylov_preconditioner`` (integrator = 'implicit' on the slab and half-space): 'jacobi' (the
     default) or 'additive', the conjugate gradients' preconditioner in each backward-Euler solve
     (:meth:`slipchain.engine.backends.implicit.SlabSystem.precondition`);
+    ``stop_at_runaway`` (dead weight with ``t_decide``): the run stops before ``t_decide`` once the
+    slider has run away for good (:func:`slipchain.results.schema.certain_runaway`: the top's velocity over
+    the last 20 ms beyond RUNAWAY_FACTOR v0 10**delta and rising), classified ``runaway``; for runs that
+    read mu_max where the block runs away as the weight rises (the runaway after it costs most of such a
+    run and tells nothing more);
     ``energy_tol`` (integrator = 'implicit'): a backward-Euler step is accepted only if its energy
     residual (its numerical dissipation) is at most this fraction of the magnitudes of its works, and
     the step doubles only below half of it (default ENERGY_TOL = 1e-4, the value before it was a key;
@@ -205,6 +213,7 @@ class Config(BaseModel):
     t_max: float = Field(0.25, gt=0)
     t_max_cycles: float = Field(DEFAULT_T_MAX_CYCLES, ge=0)  # absent from the input: see _default_step
     t_decide: float | None = Field(None, gt=0)
+    stop_at_runaway: bool = False
     t_ramp: float | None = Field(None, gt=0)
     sem_target: float = Field(0.01, gt=0)
     output_interval: float = Field(1e-5, gt=0)
@@ -291,6 +300,9 @@ class Config(BaseModel):
         if self.integrator not in ("adaptive", "implicit") and self.step_tol != OFF["step_tol"]:
             raise ValueError(_message("step_tol", self.step_tol, "absent unless integrator = 'adaptive' or 'implicit' "
                                       "(it is the adaptive step's tolerance)"))
+        if self.stop_at_runaway and (self.dead_weight is None or self.t_decide is None):
+            raise ValueError(_message("stop_at_runaway", self.stop_at_runaway, "absent (or false) unless dead_weight "
+                                      "and t_decide are given (it stops a dead-weight run before t_decide)"))
         if self.integrator != "implicit" and self.energy_tol != OFF["energy_tol"]:
             raise ValueError(_message("energy_tol", self.energy_tol, "absent unless integrator = 'implicit' (it bounds "
                                       f"the backward-Euler steps' numerical dissipation; here integrator = '{self.integrator}')"))

@@ -280,6 +280,11 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
     if cfg.dead_weight is not None:
         after = after_ramp(cfg, time)
         attrs.update(dead_weight_attrs(system, time[after], rec.X_mean[after]))
+        stopped = (certain_runaway(cfg, time, rec.X_mean) if cfg.stop_at_runaway and time.size
+                   and time[-1] < cfg.t_decide - 0.5 * cfg.output_interval else None)
+        if stopped is not None:  # the run stopped before t_decide at a certain runaway (control.UntilDecided)
+            attrs.update(velocity=np.nan, velocity_sem=np.nan, velocity_status=str(VelocityStatus.RUNAWAY),
+                         velocity_reason=stopped)
     for c in checks:
         attrs[f"check_{c.name}"] = c.value
         attrs[f"check_{c.name}_passed"] = int(c.passed)
@@ -323,6 +328,33 @@ def dead_weight_velocity(system: System, time: np.ndarray, X_mean: np.ndarray) -
                   f"(> {RUNAWAY_FACTOR:g} v0 10**delta = {v_branch:.3g} m/s), where only the contact damping "
                   "m eta_c u holds it")
     return str(VelocityStatus(status)), reason, fit
+
+
+RUNAWAY_WINDOW = 0.02  # s: config stop_at_runaway reads the top's velocity over this last stretch of the record
+
+
+def certain_runaway(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
+    """Config ``stop_at_runaway``: whether the record's last RUNAWAY_WINDOW says the slider has run away
+    for good before ``t_decide`` (while the weight still rises, or after), and why (None if it does not).
+    The top's mean velocity over each half of that stretch is beyond the rising branch
+    (faster than RUNAWAY_FACTOR*v0*10**delta, the bound :func:`accelerating_beyond_branch` uses) and
+    over the second half faster than over the first: under a load that only grows or stays, such a slider cannot come back
+    (the argument of :func:`accelerating_beyond_branch`). ``time``, ``X_mean``: the record so far (only
+    its last RUNAWAY_WINDOW is read)."""
+    if time.size < 3:
+        return None
+    start = np.searchsorted(time, time[-1] - RUNAWAY_WINDOW * (1.0 + 1e-9))
+    t, x = time[start:], X_mean[start:]
+    if t.size < 3 or t[-1] - t[0] < 0.5 * RUNAWAY_WINDOW:
+        return None
+    mid = t.size // 2
+    v, v1, v2 = ((x[b] - x[a]) / (t[b] - t[a]) for a, b in ((0, -1), (0, mid), (mid, -1)))
+    v_branch = _beyond_branch(cfg)
+    if not (v1 > v_branch and v2 > v1):  # beyond the branch over the whole stretch, and faster in its second half
+        return None
+    return (f"runaway: by t = {time[-1]:.6g} s the slider slid at {v:.3g} m/s over the last {RUNAWAY_WINDOW:g} s "
+            f"(> {RUNAWAY_FACTOR:g} v0 10**delta = {v_branch:.3g} m/s) and still accelerated ({v1:.3g} -> {v2:.3g} m/s), "
+            "beyond the maximum of mu(v) under a load that does not fall: stopped there (stop_at_runaway)")
 
 
 DECIDE_DRIFT = 0.05  # dead-weight automatic length: a steady window may change its velocity by at most this
@@ -409,7 +441,7 @@ def summary(ds: xr.Dataset) -> dict[str, Any]:
 
 
 __all__ = ["DECIDE_DRIFT", "RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
-           "Status", "accelerating_beyond_branch", "after_ramp", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
+           "Status", "accelerating_beyond_branch", "certain_runaway", "after_ramp", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
 
 if __name__ == "__main__":  # pragma: no cover - regenerates docs/run-schema.md
     print(schema_markdown(), end="")
