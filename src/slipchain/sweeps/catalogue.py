@@ -93,7 +93,7 @@ CATALOGUE: dict[str, Study] = {
                                  "tester-16-release's brackets closed: theta = 0.05 at 0.95, 1.0 and theta = 0.5 at 0.6, 0.75"),
     "tester-16-release-low": Study("study", 4, "4 core-minutes (43-65 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                    "tester-16-release at theta = 0.05 (0.85 and 0.9 over 0.1 and 0.3 s)"),
-    "tester-16-long-seeds": Study("study", 16, "not yet measured (tester-16-long: 35 core-minutes a seed)",
+    "tester-16-long-seeds": Study("study", 16, "81 core-minutes (82-956 s a run; a Zen 5 EPYC)",
                                   "docs/tester-3d/index.md", "tester-16-long's brackets for seeds 1 and 2"),
     "tester-16-low": Study("study", 4, "22 min", "docs/tester-3d/index.md",
                            "tester-16's lowest load at dt = 5e-8 s"),
