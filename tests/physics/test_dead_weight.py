@@ -94,7 +94,8 @@ def test_certain_runaway_reads_both_halves_of_the_last_stretch():
     shorter than half the window, not."""
     from slipchain.results.schema import RUNAWAY_WINDOW, certain_runaway
 
-    cfg = make_config(N=11, theta=1.0, delta=0.0, dead_weight=1.0, t_decide=0.2, t_max=0.3, stop_at_runaway=True)
+    cfg = make_config(N=11, theta=1.0, delta=0.0, dead_weight=1.0, t_ramp=0.15, t_decide=0.2, t_max=0.3,
+                      stop_at_runaway=True)
     t = np.arange(1, 4001) * 1e-5  # 40 ms: the window is the last 20 ms
     last = t > t[-1] - RUNAWAY_WINDOW
 
@@ -132,7 +133,8 @@ def test_stop_at_runaway_ends_the_run_soon_after_the_onset_with_the_same_record(
     assert ons[0]["during_ramp"] and ons[0]["t_onset"] < short.time.values[-1] < ons[0]["t_onset"] + 0.02
     for key in ("mu_onset", "mu_onset_10", "mu_slip"):
         assert ons[0][key] == ons[1][key], key
-    with pytest.raises(Exception, match="stop_at_runaway.*unless dead_weight and t_decide"):
-        make_config(**ident, dead_weight=0.5, t_total=0.1, stop_at_runaway=True)
+    for bad in (dict(t_total=0.1), dict(t_decide=0.11, t_max=0.2), dict(t_ramp=1e-3, t_decide=0.11, t_max=0.2)):
+        with pytest.raises(Exception, match="stop_at_runaway.*unless dead_weight and t_decide.*at least half"):
+            make_config(**ident, dead_weight=0.5, **bad, stop_at_runaway=True)  # no decision, no ramp, a release
     assert member_id(make_config(**cfg)) == member_id(make_config(**cfg, stop_at_runaway=False))
     assert "stop_at_runaway" not in make_config(**cfg).to_toml()
