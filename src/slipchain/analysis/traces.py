@@ -46,6 +46,7 @@ ONSET_CHECK = 10.0  # ...and, for comparison, this multiple
 ELASTIC_WEIGHTS = (0.1, 0.2)  # mu_a: where ramp_branch reads the interface's elastic loading rate (eq. (1) slips < 1e-7 m/s there)
 HELD_WINDOW = 0.2  # s: the last stretch of a record whose mean velocity says held (about one ring of the tester's top)
 BRANCH_VELOCITIES = (3e-5, 1e-4, 2e-4)  # m/s: where branch_summary reads mu(v), below every load's maximum
+BRANCH_COLUMNS = ("t", "mu", "v", "v_slip")  # ramp_branch's columns (velocity_traces adds the run's identity)
 OUTCOMES = ("steady", "held", "runaway", "undecided")  # run_outcome's values; the first two bound mu_max from below
 
 
@@ -136,10 +137,8 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray 
     nan = float("nan")
     out = {"mu_onset": nan, "mu_onset_10": nan, "t_onset": nan, "during_ramp": False, "resolution": nan,
            "mu_slip": nan, "t_slip": nan}
-    if ramp is None or not ramp > 2 * interval:
+    if is_release(cfg, time, x):  # no ramp to read, or the top's elastic loading alone near the threshold
         return out
-    if is_release(cfg, time, x):
-        return out  # the top's elastic loading alone is near the threshold: a release, not a slow ramp
     scale = cfg.v0 * 10.0 ** cfg.delta
     t_on, t_10 = (last_crossing(time, x, k * scale) for k in (ONSET_FACTOR, ONSET_CHECK))
     t_slip = first_crossing(time, x_interface, ONSET_FACTOR * scale) if x_interface is not None else nan
@@ -253,7 +252,7 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
         if not is_release(cfg, time, x):  # a release's ramp traces the top's loading, not the branch
             branches.append(ramp_branch(cfg, time, xi, window, _earliest(onset["t_onset"], onset["t_slip"])).assign(**who))
     branch = (pd.concat(branches, ignore_index=True) if branches
-              else pd.DataFrame(columns=[*who, "t", "mu", "v", "v_slip"]))  # every run a release
+              else pd.DataFrame(columns=[*who, *BRANCH_COLUMNS]))  # every run a release
     return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets), branch
 
 
@@ -330,7 +329,7 @@ def ramp_branch(cfg, time: np.ndarray, x: np.ndarray, window: float, t_end: floa
 
     ramp = dead_weight_ramp_time(cfg)
     if ramp is None or not ramp > 2 * window:
-        return pd.DataFrame({"t": [], "mu": [], "v": [], "v_slip": []})
+        return pd.DataFrame(columns=list(BRANCH_COLUMNS), dtype=float)
     t, v = window_velocity(time, x, window)
     dt = _interval(time)
     half = 0.5 * max(int(round(window / dt)), 1) * dt  # the window's half length, as window_velocity rounds it
@@ -342,7 +341,7 @@ def ramp_branch(cfg, time: np.ndarray, x: np.ndarray, window: float, t_end: floa
     low = (mu >= ELASTIC_WEIGHTS[0]) & (mu <= ELASTIC_WEIGHTS[1]) & (t + half <= ramp)
     v_el = float(np.median(v[low])) if low.any() else 0.0
     if abs(v_el) > BRANCH_VELOCITIES[0]:  # loaded so fast that the slip would be a difference of like numbers
-        return pd.DataFrame({"t": [], "mu": [], "v": [], "v_slip": []})
+        return pd.DataFrame(columns=list(BRANCH_COLUMNS), dtype=float)
     return pd.DataFrame({"t": t[keep], "mu": mu[keep], "v": v[keep], "v_slip": v[keep] - v_el})
 
 
@@ -422,7 +421,7 @@ def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=[*BRACKET_KEYS, "lo", "hi", "seeds", "runs", "inconsistent", "per_seed"])
 
 
-__all__ = ["BRACKET_KEYS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR",
+__all__ = ["BRACKET_KEYS", "BRANCH_COLUMNS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR",
            "OUTCOMES", "branch_check", "branch_summary", "first_crossing", "is_release", "last_crossing", "loading_rate", "onset_summary",
            "protocol_brackets", "ramp_branch", "rows_equal", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
            "window_velocity"]
