@@ -87,6 +87,8 @@ CATALOGUE: dict[str, Study] = {
                             "tester-16's release at once, decided from 2 s (runs of 3 s): each load's undecided gap"),
     "tester-16-long-11c": Study("study", 8, "not yet measured (tester-16-long: 35 core-minutes)", "docs/tester-3d/index.md",
                                 "tester-16-long's release at once at Fig. 3's 11 °C (seed 0)"),
+    "tester-16-long-11c-low": Study("study", 2, "not yet measured (theta = 0.05 at 11 °C: 851-878 s a run)", "docs/tester-3d/index.md",
+                                    "tester-16-long-11c's theta = 0.05 at 0.75 and 0.8 (it ran away at 0.85 and 0.9)"),
     "tester-16-release": Study("study", 4, "17 core-minutes (67-427 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                "tester-16-long at theta = 0.5 with the weight released over 0.1 and 0.3 s"),
     "tester-16-release-2": Study("study", 6, "4 of 6 run (theta = 0.05 at 0.95: 935-997 s, runaways; theta = 0.5: 61-120 s; a Zen 5 EPYC)", "docs/tester-3d/index.md",
