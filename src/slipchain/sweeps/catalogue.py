@@ -87,7 +87,7 @@ CATALOGUE: dict[str, Study] = {
                             "tester-16's release at once, decided from 2 s (runs of 3 s): each load's undecided gap"),
     "tester-16-long-11c": Study("study", 8, "40 core-minutes (52-878 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                 "tester-16-long's release at once at Fig. 3's 11 °C (seed 0)"),
-    "tester-16-long-11c-2": Study("study", 6, "not yet measured (tester-16-long-11c: 52-878 s a run)", "docs/tester-3d/index.md",
+    "tester-16-long-11c-2": Study("study", 6, "19 core-minutes (55-352 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                   "tester-16-long-11c's open brackets closed (theta 0.05, 0.2 and 1 at two more weights each)"),
     "tester-16-release": Study("study", 4, "17 core-minutes (67-427 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                "tester-16-long at theta = 0.5 with the weight released over 0.1 and 0.3 s"),
