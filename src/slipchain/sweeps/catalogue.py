@@ -109,7 +109,7 @@ CATALOGUE: dict[str, Study] = {
                              "tester-16-slower's 6-s bracket, 0.95 and 1.05, for seeds 1 and 2"),
     "tester-16-11c-slow": Study("study", 8, "all 8 run (570-2 900 s each, 3.5 core-hours; partly on 16 CPUs, partly before the compiled steps)", "docs/tester-3d/index.md",
                                 "tester-16-seeds' 6-s bracket, 0.95 and 1.05, at Fig. 3's 11 °C (seed 0)"),
-    "tester-32-long": Study("study", 4, "not yet measured (started: one run checkpointed; tester-16-long: 70-906 s a run on 16 x 16)", "docs/tester-3d/index.md",
+    "tester-32-long": Study("study", 4, "39 core-minutes (328-866 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                             "tester-16-long's release at once on 32 x 32 at the weights that decide the dip (seed 0)"),
     "tester-32-seeds": Study("study", 16, "not yet measured (the steady side: 150-450 s a run on one core)",
                              "docs/tester-3d/index.md", "tester-32-slower for seeds 1 and 2"),
