@@ -129,7 +129,7 @@ CATALOGUE: dict[str, Study] = {
                                    "tester-onset-32-etol with the ramp cut short (to 0.98 over 5.6 s, decided from 5.65 s): the same onset, less runaway?"),
     "tester-onset-128-etol": Study("study", 3, "all 3 run (theta = 0.2 from rest 3 704 s; 0.05 and 0.5, restarted to take the savings, 6 049 and 5 624 s; one Zen 5 core each)",
                                    "docs/tester-3d/index.md", "tester-onset-128's lighter loads with energy_tol = 1e-3 and the ramp cut short (seed 0)"),
-    "tester-onset-128-seeds": Study("study", 8, "started: theta = 0.05, seeds 1 and 2, checkpointed at 0.66-0.67 s after 980 s each (tester-onset-128-etol: about 1-1.7 h a run on one core)", "docs/tester-3d/index.md",
+    "tester-onset-128-seeds": Study("study", 8, "started: theta = 0.05, seeds 1 and 2, checkpointed at 3.9 s after 2 181 s each (tester-onset-128-etol: about 1-1.7 h a run on one core)", "docs/tester-3d/index.md",
                                     "tester-onset-128-etol for seeds 1 and 2 at every load"),
     "tester-onset-32-11c": Study("study", 4, "27 core-minutes (235-716 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                  "mu_max at the runaway's onset on 32 x 32 at Fig. 3's 11 °C, every load (seed 0)"),
