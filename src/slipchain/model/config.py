@@ -161,7 +161,7 @@ class Config(BaseModel):
     slowly loaded run; with the weight at once or released within a few of the tester top's ringing
     periods the top overshoots to 0.03-0.15 m/s and comes back, docs/tester-3d): the run stops before ``t_decide`` once the
     slider has run away for good (:func:`slipchain.results.schema.certain_runaway`: the top's velocity over
-    the last 20 ms beyond RUNAWAY_FACTOR v0 10**delta and rising), classified ``runaway``; for runs that
+    each half of the last 20 ms beyond RUNAWAY_FACTOR v0 10**delta and rising), classified ``runaway``; for runs that
     read mu_max where the block runs away as the weight rises (the runaway after it costs most of such a
     run and tells nothing more);
     ``energy_tol`` (integrator = 'implicit'): a backward-Euler step is accepted only if its energy
