@@ -93,6 +93,8 @@ CATALOGUE: dict[str, Study] = {
                                "tester-16-long at theta = 0.5 with the weight released over 0.1 and 0.3 s"),
     "tester-16-release-2": Study("study", 6, "4 of 6 run (theta = 0.05 at 0.95: 935-997 s, runaways; theta = 0.5: 61-120 s; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                  "tester-16-release's brackets closed: theta = 0.05 at 0.95, 1.0 and theta = 0.5 at 0.6, 0.75"),
+    "tester-16-release-seeds": Study("study", 16, "not yet measured (tester-16-release: 43-997 s a run)", "docs/tester-3d/index.md",
+                                     "tester-16-release's brackets for seeds 1 and 2 (over 0.1 and 0.3 s)"),
     "tester-16-release-low": Study("study", 4, "4 core-minutes (43-65 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                    "tester-16-release at theta = 0.05 (0.85 and 0.9 over 0.1 and 0.3 s)"),
     "tester-16-long-seeds": Study("study", 16, "81 core-minutes (82-956 s a run; a Zen 5 EPYC)",
