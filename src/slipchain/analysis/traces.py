@@ -102,6 +102,12 @@ def first_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
     return float(time[up[0] + 1]) if up.size else float("nan")
 
 
+def branch_scale(cfg) -> float:
+    """v0 10**delta (m/s): the velocity of the last contact's maximum of eq. (1) (the paper's v* at its upper
+    end), the scale of every threshold here (ONSET_FACTOR, ONSET_CHECK times it)."""
+    return cfg.v0 * 10.0 ** cfg.delta
+
+
 def is_release(cfg, time: np.ndarray, x: np.ndarray) -> bool:
     """Whether a dead-weight run's weight came on too fast to read the rising branch or the runaway's onset
     from its ramp: the weight at once (no ramp longer than two samples), or raised so fast that the top's
@@ -115,7 +121,7 @@ def is_release(cfg, time: np.ndarray, x: np.ndarray) -> bool:
         return True
     mid = (time > 0.1 * ramp) & (time <= 0.5 * ramp)
     v = _sample_velocity(time, x)
-    return bool(mid[1:].any() and np.median(v[mid[1:]]) > 0.5 * ONSET_FACTOR * cfg.v0 * 10.0 ** cfg.delta)
+    return bool(mid[1:].any() and np.median(v[mid[1:]]) > 0.5 * ONSET_FACTOR * branch_scale(cfg))
 
 
 def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray | None = None) -> dict:
@@ -139,7 +145,7 @@ def runaway_onset(cfg, time: np.ndarray, x: np.ndarray, x_interface: np.ndarray 
            "mu_slip": nan, "t_slip": nan}
     if is_release(cfg, time, x):  # no ramp to read, or the top's elastic loading alone near the threshold
         return out
-    scale = cfg.v0 * 10.0 ** cfg.delta
+    scale = branch_scale(cfg)
     t_on, t_10 = (last_crossing(time, x, k * scale) for k in (ONSET_FACTOR, ONSET_CHECK))
     t_slip = first_crossing(time, x_interface, ONSET_FACTOR * scale) if x_interface is not None else nan
 
@@ -167,7 +173,7 @@ def run_outcome(cfg, status: str, time: np.ndarray, x: np.ndarray) -> tuple[str,
         return "steady", v_end
     if status == "runaway":
         return "runaway", v_end
-    return ("held" if v_end < ONSET_FACTOR * cfg.v0 * 10.0 ** cfg.delta else "undecided"), v_end
+    return ("held" if v_end < ONSET_FACTOR * branch_scale(cfg) else "undecided"), v_end
 
 
 def seed_brackets(runs: pd.DataFrame, by: list[str] | tuple[str, ...] = (), status: str = "outcome",
@@ -422,6 +428,6 @@ def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
 
 
 __all__ = ["BRACKET_KEYS", "BRANCH_COLUMNS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR",
-           "OUTCOMES", "branch_check", "branch_summary", "first_crossing", "is_release", "last_crossing", "loading_rate", "onset_summary",
+           "OUTCOMES", "branch_check", "branch_scale", "branch_summary", "first_crossing", "is_release", "last_crossing", "loading_rate", "onset_summary",
            "protocol_brackets", "ramp_branch", "rows_equal", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
            "window_velocity"]
