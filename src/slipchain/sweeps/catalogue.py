@@ -113,7 +113,7 @@ CATALOGUE: dict[str, Study] = {
                                 "tester-16-seeds' 6-s bracket, 0.95 and 1.05, at Fig. 3's 11 °C (seed 0)"),
     "tester-32-long": Study("study", 4, "39 core-minutes (328-866 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                             "tester-16-long's release at once on 32 x 32 at the weights that decide the dip (seed 0)"),
-    "tester-32-long-seeds": Study("study", 8, "not yet measured (tester-32-long: 328-866 s a run)", "docs/tester-3d/index.md",
+    "tester-32-long-seeds": Study("study", 8, "69 core-minutes (188-754 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                   "tester-32-long for seeds 1 and 2"),
     "tester-32-seeds": Study("study", 16, "not yet measured (the steady side: 150-450 s a run on one core)",
                              "docs/tester-3d/index.md", "tester-32-slower for seeds 1 and 2"),
