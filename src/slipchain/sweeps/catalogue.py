@@ -95,6 +95,8 @@ CATALOGUE: dict[str, Study] = {
                                  "tester-16-release's brackets closed: theta = 0.05 at 0.95, 1.0 and theta = 0.5 at 0.6, 0.75"),
     "tester-16-release-seeds": Study("study", 16, "not yet measured (tester-16-release: 43-997 s a run)", "docs/tester-3d/index.md",
                                      "tester-16-release's brackets for seeds 1 and 2 (over 0.1 and 0.3 s)"),
+    "tester-16-release-seeds-2": Study("study", 5, "not yet measured (theta = 0.5 over 0.1-0.3 s: 89-444 s a run)", "docs/tester-3d/index.md",
+                                       "tester-16-release-seeds' open brackets at theta = 0.5 closed (seeds 1 and 2)"),
     "tester-16-release-low": Study("study", 4, "4 core-minutes (43-65 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                    "tester-16-release at theta = 0.05 (0.85 and 0.9 over 0.1 and 0.3 s)"),
     "tester-16-long-seeds": Study("study", 16, "81 core-minutes (82-956 s a run; a Zen 5 EPYC)",
