@@ -79,6 +79,10 @@ CASES = {
     "implicit slab, additive": dict(N=8, Ly=8, geometry="slab", theta=0.25, integrator="implicit", dt=1e-7,
                                     epsilon=1.0, start="steady", t_total=0.03, output_interval=1e-3, seed=3,
                                     krylov_preconditioner="additive"),
+    # ... and TR-BDF2 above the explicit levels (its stages' states are transient: nothing more to carry)
+    "implicit chain2d, trbdf2": dict(N=8, Ly=8, geometry="chain2d", theta=0.25, integrator="implicit", dt=1e-7,
+                                     epsilon=1.0, start="steady", t_total=0.03, output_interval=1e-3, seed=3,
+                                     implicit_scheme="trbdf2"),
 }
 SAVES = {"dead weight, automatic length": 60, "dead weight, stop at runaway": 88}
 

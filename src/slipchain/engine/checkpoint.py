@@ -48,11 +48,11 @@ from .observers import Recorder
 FORMAT = 2  # bumped whenever the layout below changes; a checkpoint of another format is refused
 READS = (1, 2)  # formats this version reads: 1 lacks the bulk's state and the bulk's work (both zero then)
 CHECKPOINT_EVERY = 60.0  # default wall-time seconds between checkpoints (slipchain run --checkpoint-every)
-# The batch's arrays; geometry, shape, the elastic kernel, the adaptive step's folds and control and the
-# preconditioner follow from the configs (Batch.pack).
+# The batch's arrays; geometry, shape, the elastic kernel, the adaptive step's folds and control, the
+# preconditioner and the implicit scheme follow from the configs (Batch.pack).
 _BATCH_FIELDS = [f.name for f in fields(Batch)
                  if f.name not in ("geometry", "shape", "kernel", "folds", "step_control", "material", "twoport",
-                                   "preconditioner")]
+                                   "preconditioner", "implicit_scheme")]
 
 
 class CheckpointError(ValueError):

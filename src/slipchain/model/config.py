@@ -38,6 +38,9 @@ ALLOWED: dict[str, str] = {
                              "slab or half-space",
     "energy_tol": "a number in (0, 0.1] (integrator = 'implicit': largest energy residual of a backward-Euler step, "
                   "its numerical dissipation, as a fraction of the magnitudes of the step's works; default 1e-4)",
+    "implicit_scheme": "one of 'backward-euler' (the default), 'trbdf2' (the second-order L-stable TR-BDF2 step above "
+                       "the explicit levels), 'trbdf2' only with integrator = 'implicit' on the slab, half-space or "
+                       "chain2d with material = 'elastic'",
     "min_cycles": "an integer >= 0 (automatic length: slip cycles the steady window must hold; 0 for none)",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
     "c": "a number >= 0",
@@ -99,10 +102,12 @@ LEGACY_KEYS: dict[str, str] = {
 # krylov_preconditioner: 'jacobi', the implicit stepper's only preconditioner on the slab before it existed.
 # energy_tol: ENERGY_TOL, the implicit stepper's fixed energy tolerance before it was a key.
 # stop_at_runaway: False, a dead-weight run went on to t_decide before it existed.
+# implicit_scheme: 'backward-euler', the implicit stepper's only step above the explicit levels before it existed.
 ENERGY_TOL = 1e-4
 OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0,
                        "t_max_cycles": 0.0, "material": "elastic", "krylov_preconditioner": "jacobi",
-                       "energy_tol": ENERGY_TOL, "stop_at_runaway": False}
+                       "energy_tol": ENERGY_TOL, "stop_at_runaway": False,
+                       "implicit_scheme": "backward-euler"}
 _NOT_OFF = object()
 
 # The adaptive step's largest step stays below this fraction of the stable step (Config.dt_stable).
@@ -169,6 +174,12 @@ class Config(BaseModel):
     the step doubles only below half of it (default ENERGY_TOL = 1e-4, the value before it was a key;
     where the heavy tester top creeps under a slowly rising weight this, not ``step_tol``, bounds the
     step: docs/numerics.md);
+    ``implicit_scheme`` (integrator = 'implicit' on the slab, half-space and chain2d, material 'elastic'):
+    'backward-euler' (the default) or 'trbdf2', the step taken above the explicit levels: TR-BDF2
+    (a trapezoidal stage to t + gamma h, then BDF2 to t + h, gamma = 2 - sqrt(2); second order and
+    L-stable, its numerical dissipation of a resolved oscillation ~ (h omega)**4 against backward
+    Euler's (h omega)**2), each stage a backward-Euler-like solve from a shifted base state
+    (:func:`slipchain.engine.backends.implicit.krylov_trbdf2_try`; issue 27);
     ``dt`` absent: :attr:`default_dt`; every dt must lie below :attr:`dt_stable`;
     ``min_cycles``: the automatic length also needs this many cycles of f_d in its steady window
     (:class:`slipchain.engine.control.UntilConverged`; for the long slip cycles at epsilon = 1);
@@ -209,6 +220,7 @@ class Config(BaseModel):
     step_tol: float = Field(0.01, gt=0)
     krylov_preconditioner: Literal["jacobi", "additive"] = "jacobi"
     energy_tol: float = Field(ENERGY_TOL, gt=0, le=0.1)
+    implicit_scheme: Literal["backward-euler", "trbdf2"] = "backward-euler"
     min_cycles: int = Field(0, ge=0)
 
     dt: float = Field(2e-8, gt=0)  # absent from the input: Config.default_dt (the 2e-8 is never used)
@@ -312,6 +324,14 @@ class Config(BaseModel):
         if self.integrator != "implicit" and self.energy_tol != OFF["energy_tol"]:
             raise ValueError(_message("energy_tol", self.energy_tol, "absent unless integrator = 'implicit' (it bounds "
                                       f"the backward-Euler steps' numerical dissipation; here integrator = '{self.integrator}')"))
+        if self.implicit_scheme != OFF["implicit_scheme"] and (
+                self.integrator != "implicit" or self.geometry not in ("slab", "halfspace", "chain2d")
+                or self.material != "elastic"):
+            raise ValueError(_message("implicit_scheme", self.implicit_scheme, "absent (or 'backward-euler') unless "
+                                      "integrator = 'implicit' with geometry = 'slab', 'halfspace' or 'chain2d' and "
+                                      "material = 'elastic' (TR-BDF2 is built for their Newton-Krylov step; here "
+                                      f"integrator = '{self.integrator}', geometry = '{self.geometry}', material = "
+                                      f"'{self.material}')"))
         if self.krylov_preconditioner != OFF["krylov_preconditioner"] and (
                 self.integrator != "implicit" or self.geometry not in ("slab", "halfspace")):
             raise ValueError(_message("krylov_preconditioner", self.krylov_preconditioner, "absent (or 'jacobi') unless "

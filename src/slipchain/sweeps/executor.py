@@ -88,14 +88,14 @@ def run_members(configs: list[Config], backend: str = BackendName.CPU, checkpoin
 
 def batches(members: list[Member], size: int) -> list[list[Member]]:
     """Members grouped for :func:`run_members`: equal N, Ly, geometry, dt and output interval, the adaptive step,
-    the implicit one (and its preconditioner) or neither, the long chunks of ``min_cycles`` or not, at most ``size`` each,
+    the implicit one (and its preconditioner and scheme) or neither, the long chunks of ``min_cycles`` or not, at most ``size`` each,
     similar expected cost together (the input order, by decreasing cost, is kept)."""
     groups: dict[tuple, list[Member]] = {}
     for m in members:
         c = m.config
         groups.setdefault((c.N, c.Ly, c.geometry, c.dt, c.sample_steps, c.integrator == "adaptive",
                            c.integrator == "implicit", c.min_cycles > 0, c.material, len(c.prony_E or ()),
-                           c.top_is_state, c.krylov_preconditioner), []).append(m)
+                           c.top_is_state, c.krylov_preconditioner, c.implicit_scheme), []).append(m)
     out = []
     for g in groups.values():
         out += [g[i:i + size] for i in range(0, len(g), size)]

@@ -63,6 +63,9 @@ class Batch:
     # integrator = 'implicit' on the slab and half-space: the conjugate gradients' preconditioner
     # (Config.krylov_preconditioner, one per batch; :meth:`.implicit.SlabSystem.precondition`)
     preconditioner: str = "jacobi"
+    # integrator = 'implicit' on the slab, half-space and chain2d: the step above the explicit levels
+    # (Config.implicit_scheme, one per batch: 'backward-euler' or 'trbdf2'; :func:`.implicit.krylov_trbdf2_try`)
+    implicit_scheme: str = "backward-euler"
 
     @property
     def implicit(self) -> bool:
@@ -88,6 +91,8 @@ class Batch:
             raise ValueError("a batch needs one material and as many Prony terms in every row")
         if {s.config.krylov_preconditioner for s in systems} != {c0.krylov_preconditioner}:
             raise ValueError("a batch needs one krylov_preconditioner in every row")
+        if {s.config.implicit_scheme for s in systems} != {c0.implicit_scheme}:
+            raise ValueError("a batch needs one implicit_scheme in every row")
         b = len(systems)
         cmax = max(1, max(s.n_contacts for s in systems))
         params = np.zeros((b, S.N_PARAMS))
@@ -166,6 +171,7 @@ class Batch:
             carry=np.zeros((b, N_CARRY + 2 * n) if c0.integrator == "implicit" else (b, 0)),
             twoport=np.stack([twoport_kernel(s.config) for s in systems]) if top else None,
             preconditioner=c0.krylov_preconditioner,
+            implicit_scheme=c0.implicit_scheme,
         )
 
     def state(self, row: int) -> State:

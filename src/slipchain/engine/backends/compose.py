@@ -809,6 +809,7 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
     compiled = default_fft and top is None and (not spectral_body or numba_fft()) and (not prony or numba_dot())
     explicit_steps = _krylov_explicit(BODIES[batch.geometry] + ("-prony" if prony else "")) if compiled else None
     lx, ly = batch.shape
+    trbdf2 = batch.implicit_scheme == "trbdf2"  # Config.implicit_scheme: TR-BDF2 above the explicit levels
     for row in np.flatnonzero(batch.status < 0):
         r = slice(row, row + 1)
         p = batch.params[row]
@@ -875,14 +876,22 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 t1 = (batch.step[row] + w) * dt0
                 if top is not None and batch.bstate[row, -1, 1] != batch.step[row]:  # the top current at the step's
                     top.solve()  # start (after explicit steps; a solve at the step of the last one changes nothing)
-                its, n_cg = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0], ra,
-                                                   rk, ap, cr[CT_HAVE] > 0)
+                if trbdf2:
+                    its, n_cg, stages = implicit.krylov_trbdf2_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1,
+                                                                   ctrl[0], ra, rk, ap, cr[CT_HAVE] > 0)
+                else:
+                    its, n_cg = implicit.krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, ctrl[0],
+                                                       ra, rk, ap, cr[CT_HAVE] > 0)
                 spent += KRYLOV_TRY_UNITS + abs(its) + n_cg * system.cg_units
                 err = _error(n, ur, Ur, un, Un, ap, h) if its > 0 and cr[CT_HAVE] > 0 else 0.0
                 bal = scale = fsum = w_drive = w_damp = w_contact = w_visc = 0.0
                 if its > 0 and err <= ctrl[0]:
-                    bal, scale, fsum, w_drive, w_damp, w_contact, w_visc = system.balance(xr, ur, Xr, Ur, un, Un, h, t1, nc,
-                                                                                          st, vs)
+                    if trbdf2:
+                        bal, scale, fsum, w_drive, w_damp, w_contact, w_visc = implicit.trbdf2_balance(system, p, stages, un,
+                                                                                                       Un, nc, st, vs)
+                    else:
+                        bal, scale, fsum, w_drive, w_damp, w_contact, w_visc = system.balance(xr, ur, Xr, Ur, un, Un, h, t1,
+                                                                                              nc, st, vs)
                 cut = w < (1 << lv)
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
                     continue
@@ -893,7 +902,12 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                     cr[CT_BACKOFF] = cr[CT_WAIT] = waits
                 spent = 0.0
                 implicit_accept(p, ur, Ur, un, Un, ap, h, nc, st, vs, ys, ra, rk, uk, fk, ca, slow, w)
-                commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
+                if trbdf2:  # the positions from the BDF2 stage's base: x' = xB + h2 u'
+                    xr[:] = stages.xB
+                    Xr[:] = stages.XB
+                    commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, stages.h2)
+                else:
+                    commit(p, batch.material[row], batch.bstate[row], xr, ur, Xr, Ur, un, Un, dampx, dampX, h)
                 if top is not None:
                     system.commit_top(batch.step[row] + w, batch.bstate[row])
                 acc[row, A_WCONTACT] -= w_contact

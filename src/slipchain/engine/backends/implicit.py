@@ -633,6 +633,7 @@ class SlabSystem:
         self.n = op.n
         self._preconditioner(preconditioner)
         self.dead = p[P_KD] == 0.0
+        self.moves_upper = self.dead  # the plate is a state of the step under the dead weight (TR-BDF2's stages)
         self.size = self.n + 1 if self.dead else self.n
         # material 'prony': the arms act through L_c under the dead weight, through L less its uniform mode
         # (the drive springs' k(0) = kappa_d: the half-space) under the spring drive (model.viscoelastic.arm_kernel)
@@ -713,6 +714,10 @@ class SlabSystem:
             z[:n] = np.where(free, zf, z[:n])
         return z
 
+    def unknowns(self, u, U):
+        """The unknowns' vector of velocities (u, U): the blocks', and the plate's under the dead weight."""
+        return np.concatenate([u, U[:1]]) if self.dead else u.copy()
+
     def upper(self, v, Un):
         """The upper layer's velocities from the unknowns: the plate's (dead weight), or zero."""
         Un[:] = v[self.n] if self.dead else 0.0
@@ -753,6 +758,43 @@ class SlabSystem:
         w_damp = -0.5 * meta * (float(np.dot(ur - vd, ur)) + float(np.dot(un - vd, un))) * h
         w_visc = self._arm_work(un, lun, h)
         return _balance(p, e1 - e0, fsum, fsum * vd * h, w_damp, h, nc, st, vs, ur, un, w_visc)
+
+    def rate(self, x, u, X, U, t):
+        """The accelerations of the linear part at a state (x, u, X, U; time t), as the blocks' and the
+        upper layer's arrays: everything but the contacts (TR-BDF2's trapezoidal stage needs the force at
+        the step's start, :func:`krylov_trbdf2_try`). Spring drive: m a = -L (x - v_d t) - m gamma (u - v_d)
+        (the upper layer none); dead weight: m a = -L_c (x - X) - m gamma (u - U) on the blocks and
+        N_L m A = F_b + k_c(0) (<x> - X) + m gamma <u - U> on the plate (every entry of X, U)."""
+        p, op = self.p, self.op
+        m, meta, k0 = p[P_M], p[P_META], op.k0
+        if self.dead:
+            Xp, Up = float(X[0]), float(U[0])
+            au = (-op.apply(x - Xp) - meta * (u - Up)) / m
+            aU = (p[P_FCONST] + k0 * (float(np.mean(x)) - Xp) + meta * (float(np.mean(u)) - Up)) / p[P_ML]
+            return au, np.full(self.n, aU)
+        return (-op.apply(x) + k0 * p[P_VD] * t - meta * (u - p[P_VD])) / m, np.zeros(self.n)
+
+    def energy(self, x, u, X, U, t):
+        """The mechanical energy at a state (as :meth:`balance` has it): kinetic, the body's
+        (1/2) (x - d) . L (x - d) (d = v_d t, or the plate's X), and under the dead weight the plate's
+        kinetic energy and the weight's potential -F_b n X."""
+        p, op, n = self.p, self.op, self.n
+        e = 0.5 * p[P_M] * float(np.dot(u, u))
+        if self.dead:
+            Xp, Up = float(X[0]), float(U[0])
+            return e + 0.5 * n * p[P_ML] * Up * Up + op.energy(x - Xp, op.apply(x - Xp), 0.0) - p[P_FCONST] * n * Xp
+        return e + op.energy(x, op.apply(x), p[P_VD] * t)
+
+    def powers(self, x, u, X, U, t):
+        """(the drive springs' force summed over the blocks, the damping's power) at a state, as
+        :meth:`balance` takes them at a step's ends (the dead weight: no drive force here, its work is
+        the weight's potential in :meth:`energy`)."""
+        p, k0 = self.p, self.op.k0
+        meta, vd = p[P_META], p[P_VD]
+        if self.dead:
+            Up = float(U[0])
+            return 0.0, -meta * float(np.sum((u - Up) ** 2))
+        return k0 * (self.n * vd * t - float(np.sum(x))), -meta * float(np.dot(u - vd, u))
 
     def _arm_work(self, w1, lw1, h):
         """The arms' work on the blocks over the step, -h K_b gbar . w' (w' the step's velocity the arms
@@ -918,6 +960,7 @@ class LatticeSystem:
         self.fft = fft
         self.n = shape[0] * shape[1]
         self.size = 2 * self.n
+        self.moves_upper = True  # the upper layer is a state of the step (TR-BDF2's stages)
         self.ly = int(shape[1])
         self.cg_units = 1
         self.work = [np.empty(self.n) for _ in range(6)]
@@ -977,6 +1020,9 @@ class LatticeSystem:
         zU = f.irfft2(self.upper_symbol * f.rfft2(r[n:].reshape(self.shape)), s=self.shape).reshape(n)
         return np.concatenate([r[:n] / (self.diag_u + jd[:n]), zU])
 
+    def unknowns(self, u, U):
+        return np.concatenate([u, U])
+
     def upper(self, v, Un):
         Un[:] = v[self.n:]
 
@@ -992,6 +1038,23 @@ class LatticeSystem:
         sX = float(np.sum(X))
         return float(0.5 * p[P_M] * np.dot(u, u) + 0.5 * p[P_ML] * np.dot(U, U) - 0.5 * (np.dot(x, fx) + np.dot(X, fX))
                      - p[P_KD] * drive * sX + 0.5 * p[P_KD] * drive * drive * self.n - p[P_FCONST] * sX)
+
+    def rate(self, x, u, X, U, t):
+        """The accelerations of the linear part at a state (as :meth:`SlabSystem.rate`): the springs and
+        the pair dampers (:func:`lattice_terms`), the drive springs' K_d (v_d t - X) and the dead weight."""
+        p = self.p
+        fx, fX, _, _ = self.terms(x, X)
+        fx, fX = fx.copy(), fX.copy()
+        _, _, dx, dX = self.terms(u, U)
+        return (fx + dx) / p[P_M], (fX + dX + p[P_KD] * p[P_VD] * t + p[P_FCONST]) / p[P_ML]
+
+    def powers(self, x, u, X, U, t):
+        """(the drive springs' force summed over the blocks, the pair dampers' power) at a state, as
+        :meth:`balance` takes them at a step's ends."""
+        p = self.p
+        _, _, dx, dX = self.terms(u, U)
+        return (p[P_KD] * (self.n * p[P_VD] * t - float(np.sum(X))),
+                float(np.dot(dx, u) + np.dot(dX, U)))
 
     def balance(self, xr, ur, Xr, Ur, un, Un, h, t1, nc, st, vs):
         """The step's works by the trapezoidal rule and its energy residual, as :func:`step_balance`
@@ -1022,7 +1085,7 @@ def _balance(p, de, fsum, w_drive, w_damp, h, nc, st, vs, ur, un, w_visc=0.0):
             w_drive, w_damp, w_contact, w_visc)
 
 
-def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
+def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have, start=None):
     """One backward-Euler step of a slab, half-space or chain2d row (``system``: :class:`SlabSystem`
     or :class:`LatticeSystem`) from (x, u, X, U) at time t1 - h: writes the new velocities into
     ``un``, ``Un`` and each contact's (y, sign) into ``yk``, ``sk``, touching nothing else. Newton
@@ -1033,17 +1096,26 @@ def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol,
     where none does, the preconditioned spectrum lies within the spread of A's diagonal over its
     eigenvalues, so the iterations stay few either way. Returns (Newton iterations or -1 where the
     step may not be taken by backward Euler, conjugate-gradient iterations). (The preconditioner is the
-    system's own, ``system.precondition``: Jacobi on the slab, by layer on chain2d.)"""
+    system's own, ``system.precondition``: Jacobi on the slab, by layer on chain2d.) ``start`` (TR-BDF2's
+    stages, whose base state is no velocity the blocks had): Newton's start from the velocities (u, U)
+    extrapolated over ``dh`` with the last step's accelerations, the contacts' signs from u, instead of from
+    the base (x, u, X, U) extrapolated over h."""
     from scipy.sparse.linalg import LinearOperator, cg
 
     n = xr.size
     amp, c, meta_c = p[P_AMP], p[P_C], p[P_M] * p[P_ETAC]
     rhs, v = system.setup(xr, ur, Xr, Ur, h, t1)
     size = system.size
-    if have:
+    u_sign = ur
+    if start is not None:
+        u_sign, U_start, dh = start
+        v = system.unknowns(u_sign, U_start)
+        if have:
+            v += dh * system.acceleration(ap)
+    elif have:
         v += h * system.acceleration(ap)
     un[:] = v[:n]
-    if not start_contacts(nc, st, ur, un, ys, vs, yk, sk):
+    if not start_contacts(nc, st, u_sign, un, ys, vs, yk, sk):
         return -1, 0
     hf = np.zeros(size)
     dk = np.empty(nc)
@@ -1083,6 +1155,103 @@ def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol,
     return -1, cg_its[0]
 
 
-__all__ = ["ENERGY_TOL", "NEWTON_MAX", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "TopSlabSystem", "Y_MAX", "be_contacts", "be_try", "be_try_arms", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
+GAMMA = 2.0 - math.sqrt(2.0)  # TR-BDF2's stage: the trapezoidal rule to t + gamma h (the BDF2 weights then equal)
+
+
+@nb.njit
+def contact_forces_at(nc, st, vs, u, amp, c, meta_c, out):
+    """Eq. (1) with its damping at the blocks' velocities ``u``, into ``out`` at each contact's block
+    (as :func:`contact_power_at` evaluates it: zero at zero velocity)."""
+    for k in range(nc):
+        uk = u[st[k]]
+        if uk != 0.0:
+            y = math.log10(abs(uk) / vs[k])
+            out[st[k]] = math.copysign(amp * math.exp(-c * y * y), uk) + meta_c * uk
+
+
+class TrBdf2Step:
+    """One TR-BDF2 step's states for its balance and commit: the start (x, u, X, U) at t0, the
+    trapezoidal stage's end at t0 + gamma h, and the BDF2 stage's base positions (xB, XB), from which
+    the positions at the step's end are xB + h2 u', XB + h2 U' (h2 = (1 - gamma)/(2 - gamma) h)."""
+
+    def __init__(self, start, stage, xB, XB, h2, t0, t1):
+        self.start, self.stage, self.xB, self.XB, self.h2, self.t0, self.t1 = start, stage, xB, XB, h2, t0, t1
+
+
+def krylov_trbdf2_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
+    """One TR-BDF2 step (``Config.implicit_scheme = 'trbdf2'``, issue 27) of a slab, half-space or chain2d
+    row from (x, u, X, U) at t0 = t1 - h, as :func:`krylov_be_try`'s two solves:
+
+    1. the trapezoidal rule to t_g = t0 + gamma h, gamma = 2 - sqrt(2):
+       q_g = q + (gamma h/2)(v + v_g), M (v_g - v) = (gamma h/2)(F(q, v, t0) + F(q_g, v_g, t_g)),
+       which is backward Euler with step h1 = gamma h/2 from the base state (q + h1 v, v + h1 M^-1 F(q, v, t0)):
+       its force at the start (the linear part, :meth:`SlabSystem.rate`, and the contacts' eq. (1)) is the
+       one more operator product;
+    2. BDF2 over (t0, t_g, t1): q' = c1 q_g - c2 q + h2 v', M v' = M (c1 v_g - c2 v) + h2 F(q', v', t1), with
+       c1 = 1/(gamma (2 - gamma)), c2 = (1 - gamma)**2/(gamma (2 - gamma)), h2 = (1 - gamma)/(2 - gamma) h:
+       backward Euler with step h2 from the base (c1 q_g - c2 q, c1 v_g - c2 v).
+
+    Second order and L-stable (:func:`slipchain.model.stability.trbdf2_amplification`); every contact
+    must stay on the rising branch in both stages (each solve's own condition). Writes the new velocities
+    into ``un``, ``Un`` and the contacts' (y, sign) into ``yk``, ``sk``, touching nothing else. Returns
+    (Newton iterations of both solves, or -1 where the step may not be taken, conjugate-gradient
+    iterations, :class:`TrBdf2Step` or None)."""
+    n = xr.size
+    g = GAMMA
+    h1 = 0.5 * g * h
+    t0 = t1 - h
+    tg = t0 + g * h
+    upper = system.moves_upper  # the upper layer (chain2d) or the plate (dead weight) is a state of the step
+    au, aU = system.rate(xr, ur, Xr, Ur, t0)
+    fc = np.zeros(n)
+    contact_forces_at(nc, st, vs, ur, p[P_AMP], p[P_C], p[P_M] * p[P_ETAC], fc)
+    au -= fc / p[P_M]
+    xb, ub = xr + h1 * ur, ur + h1 * au
+    Xb, Ub = (Xr + h1 * Ur, Ur + h1 * aU) if upper else (Xr, Ur)
+    its1, cg1 = krylov_be_try(system, p, xb, ub, Xb, Ub, st, vs, nc, ys, un, Un, h1, tg, tol, yk, sk, ap, have,
+                              (ur, Ur, g * h))
+    if its1 < 0:
+        return -1, cg1, None
+    ug, Ug = un.copy(), Un.copy()
+    xg = xb + h1 * ug
+    Xg = Xb + h1 * Ug if upper else Xr
+    c1 = 1.0 / (g * (2.0 - g))
+    c2 = (1.0 - g) ** 2 / (g * (2.0 - g))
+    h2 = (1.0 - g) / (2.0 - g) * h
+    xB, uB = c1 * xg - c2 * xr, c1 * ug - c2 * ur
+    XB, UB = (c1 * Xg - c2 * Xr, c1 * Ug - c2 * Ur) if upper else (Xr, Ur)
+    its2, cg2 = krylov_be_try(system, p, xB, uB, XB, UB, st, vs, nc, ys, un, Un, h2, t1, tol, yk, sk, ap, have,
+                              (ug, Ug, (1.0 - g) * h))
+    if its2 < 0:
+        return -1, cg1 + cg2, None
+    return its1 + its2, cg1 + cg2, TrBdf2Step((xr.copy(), ur.copy(), Xr.copy(), Ur.copy()), (xg, ug, Xg, Ug), xB, XB, h2,
+                                              t0, t1)
+
+
+def trbdf2_balance(system, p, step, un, Un, nc, st, vs):
+    """A TR-BDF2 step's works, each stage's by the trapezoidal rule between its ends, and its energy
+    residual (the change of :meth:`SlabSystem.energy` less the works), in :func:`_balance`'s order (the
+    drive force sum its mean over the step)."""
+    amp, c, meta_c = p[P_AMP], p[P_C], p[P_M] * p[P_ETAC]
+    x1 = step.xB + step.h2 * un
+    X1 = step.XB + step.h2 * Un if system.moves_upper else step.XB
+    tg = step.t0 + GAMMA * (step.t1 - step.t0)
+    states = [(*step.start, step.t0), (*step.stage, tg), (x1, un, X1, Un, step.t1)]
+    pw = [system.powers(*s) for s in states]
+    cp = [contact_power_at(nc, st, vs, s[1], amp, c, meta_c) for s in states]
+    f_int = w_damp = w_contact = 0.0
+    for i in range(2):
+        d = states[i + 1][4] - states[i][4]
+        f_int += 0.5 * (pw[i][0] + pw[i + 1][0]) * d
+        w_damp += 0.5 * (pw[i][1] + pw[i + 1][1]) * d
+        w_contact += 0.5 * (cp[i] + cp[i + 1]) * d
+    h = step.t1 - step.t0
+    w_drive = f_int * p[P_VD]
+    de = system.energy(*states[2]) - system.energy(*states[0])
+    return (de - (w_drive + w_damp - w_contact), abs(w_drive) + abs(w_damp) + abs(w_contact), f_int / h, w_drive,
+            w_damp, w_contact, 0.0)
+
+
+__all__ = ["ENERGY_TOL", "GAMMA", "NEWTON_MAX", "TrBdf2Step", "contact_forces_at", "krylov_trbdf2_try", "trbdf2_balance", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "TopSlabSystem", "Y_MAX", "be_contacts", "be_try", "be_try_arms", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
            "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
            "step_balance"]
