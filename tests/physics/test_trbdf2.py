@@ -123,6 +123,8 @@ CASES = {
     "chain2d": dict(geometry="chain2d", N=16, Ly=16, start="steady", t_total=0.05),
     "slab, dead weight": dict(geometry="slab", N=8, Ly=8, dead_weight=0.3, start="rest", t_total=0.05),
     "slab, low load": dict(geometry="slab", N=16, Ly=16, theta=0.05, start="steady", t_total=0.05),
+    "halfspace": dict(geometry="halfspace", N=16, Ly=16, start="steady", t_total=0.05),
+    "chain2d, dead weight": dict(geometry="chain2d", N=8, Ly=8, dead_weight=0.3, start="rest", t_total=0.05),
 }
 
 
@@ -143,10 +145,15 @@ def test_agrees_with_the_adaptive_step_at_the_physical_contact_stiffness(case):
         assert tr.attrs["check_energy_balance"] < 1e-4
         return
     ft, fa = tr.f_d.values, ada.f_d.values
-    assert np.abs(ft - fa).max() < 3e-3 * np.abs(fa).max(), np.abs(ft - fa).max() / np.abs(fa).max()
+    # the half-space drifts apart from the adaptive step over the window for either implicit step (measured:
+    # TR-BDF2 4.7e-3 of the largest force at the end, backward Euler 6.6e-3; the others below 2e-3)
+    tol = 6e-3 if cfg["geometry"] == "halfspace" else 3e-3
+    assert np.abs(ft - fa).max() < tol * np.abs(fa).max(), np.abs(ft - fa).max() / np.abs(fa).max()
     for key in ("W_drive", "W_damping", "W_contacts"):
         assert abs(tr.attrs[key] / ada.attrs[key] - 1) < 3e-3, key
-    assert tr.attrs["check_energy_balance"] < 1e-3 or cfg["theta"] < 0.1  # the short low-load window: as adaptive's
+    # the energy balance over these short windows from the steady start: as the adaptive step's (measured
+    # 1.1e-3 on the half-space and 1.9e-3 on the slab at low load for both)
+    assert tr.attrs["check_energy_balance"] < 1.1 * ada.attrs["check_energy_balance"] + 1e-4
 
 
 def test_refused_where_nothing_builds_it_and_keeps_member_ids():

@@ -764,7 +764,8 @@ class SlabSystem:
         upper layer's arrays: everything but the contacts (TR-BDF2's trapezoidal stage needs the force at
         the step's start, :func:`krylov_trbdf2_try`). Spring drive: m a = -L (x - v_d t) - m gamma (u - v_d)
         (the upper layer none); dead weight: m a = -L_c (x - X) - m gamma (u - U) on the blocks and
-        N_L m A = F_b + k_c(0) (<x> - X) + m gamma <u - U> on the plate (every entry of X, U)."""
+        N_L m A = F_b + k_c(0) (<x> - X) + m gamma <u - U> on the plate (every entry of X, U). The elastic
+        bulk's (TR-BDF2 is refused with the Prony arms and on :class:`TopSlabSystem`)."""
         p, op = self.p, self.op
         m, meta, k0 = p[P_M], p[P_META], op.k0
         if self.dead:
@@ -1041,7 +1042,8 @@ class LatticeSystem:
 
     def rate(self, x, u, X, U, t):
         """The accelerations of the linear part at a state (as :meth:`SlabSystem.rate`): the springs and
-        the pair dampers (:func:`lattice_terms`), the drive springs' K_d (v_d t - X) and the dead weight."""
+        the pair dampers (:func:`lattice_terms`), the drive springs' K_d (v_d t - X) and the dead weight (the
+        elastic bulk's: TR-BDF2 is refused with the Prony arms)."""
         p = self.p
         fx, fX, _, _ = self.terms(x, X)
         fx, fX = fx.copy(), fX.copy()

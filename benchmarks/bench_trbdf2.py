@@ -1,0 +1,64 @@
+"""Issue 27: TR-BDF2 (``implicit_scheme = 'trbdf2'``) against backward Euler (the implicit stepper's
+default) and the explicit adaptive step, side by side in one process.
+
+Fig. 6's point in 3-D at the physical contact stiffness (the fig6-3d-eps1 presets: epsilon = 1,
+N_L = 5, eta_c = 0.1 omega0, steady start, dt = 1e-7 s, 1-ms samples) on an ``--L`` x ``--L`` slab or
+chain2d at load ``--theta`` and drive velocity ``--v-d``, ``--t`` simulated seconds. Each variant runs once
+short (to compile), then ``--repeat`` times alternating; prints per variant the mean wall time, mu_star,
+the energy balance, the drive force's largest and rms difference from the adaptive step's record
+(relative to its largest value) and the wall-time ratios.
+
+    .venv/bin/python benchmarks/bench_trbdf2.py --geometry slab --L 64 --theta 0.05 --t 0.1
+    .venv/bin/python benchmarks/bench_trbdf2.py --geometry chain2d --L 32 --theta 0.05 --t 0.1
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+
+import numpy as np
+
+from slipchain import run
+
+VARIANTS = {"adaptive": dict(integrator="adaptive"), "backward-euler": dict(integrator="implicit"),
+            "trbdf2": dict(integrator="implicit", implicit_scheme="trbdf2")}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--geometry", default="slab", choices=["slab", "halfspace", "chain2d"])
+    ap.add_argument("--L", type=int, default=32)
+    ap.add_argument("--theta", type=float, default=0.05)
+    ap.add_argument("--v-d", type=float, default=1e-3)
+    ap.add_argument("--t", type=float, default=0.1, help="simulated seconds")
+    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    args = ap.parse_args()
+    cfg = dict(geometry=args.geometry, N=args.L, Ly=args.L, N_L=5, theta=args.theta, eta_c=1e5, v_d=args.v_d,
+               start="steady", dt=1e-7, epsilon=1.0, seed=0, output_interval=1e-3, t_total=args.t)
+    for name in args.variants:
+        run(dict(cfg, **VARIANTS[name], t_total=4e-3))
+    walls: dict = {name: [] for name in args.variants}
+    last: dict = {}
+    for _ in range(args.repeat):
+        for name in args.variants:
+            t0 = time.perf_counter()
+            last[name] = run(dict(cfg, **VARIANTS[name]))
+            walls[name].append(time.perf_counter() - t0)
+    print(f"# {platform.processor() or platform.machine()}; {args.geometry} {args.L} x {args.L}, epsilon = 1, theta = "
+          f"{args.theta:g}, v_d = {args.v_d:g}, {args.t:g} s simulated, {args.repeat} alternating repeat(s)")
+    ref = last[args.variants[0]].f_d.values
+    scale = np.abs(ref).max()
+    for name in args.variants:
+        ds, w = last[name], float(np.mean(walls[name]))
+        f = ds.f_d.values
+        print(f"{name:15s} wall {w:8.2f} s  mu_star {float(ds.attrs['mu_star']):.6f}  energy "
+              f"{float(ds.attrs['check_energy_balance']):.2e}  f_d vs {args.variants[0]}: max "
+              f"{np.abs(f - ref).max() / scale:.1e} rms {np.sqrt(np.mean((f - ref) ** 2)) / scale:.1e}  "
+              + "  ".join(f"{o}/{name} {np.mean(walls[o]) / w:.2f}x" for o in args.variants if o != name))
+
+
+if __name__ == "__main__":
+    main()
