@@ -33,9 +33,9 @@ ALLOWED: dict[str, str] = {
     "step_tol": "a number > 0 (integrator = 'adaptive' or 'implicit': largest local velocity error per step, in "
                 "units of v_d)",
     "krylov_preconditioner": "one of 'jacobi' (the default: the diagonal), 'additive' (by site: the diagonal on "
-                             "the contact blocks, the body's exact Fourier inverse on the free ones; fewer conjugate-"
-                             "gradient iterations at low load, each dearer), only with integrator = 'implicit' on the "
-                             "slab or half-space",
+                             "the contact blocks, the body's (chain2d: the interface layer's) exact Fourier inverse on "
+                             "the free ones; fewer conjugate-gradient iterations at low load, each dearer), only with "
+                             "integrator = 'implicit' on the slab, half-space or chain2d",
     "energy_tol": "a number in (0, 0.1] (integrator = 'implicit': largest energy residual of a backward-Euler step, "
                   "its numerical dissipation, as a fraction of the magnitudes of the step's works; default 1e-4)",
     "implicit_scheme": "one of 'backward-euler' (the default), 'trbdf2' (the second-order L-stable TR-BDF2 step above "
@@ -159,9 +159,10 @@ class Config(BaseModel):
     the step bounded by ``step_tol`` and the output samples alone, up to dt 2**24:
     :mod:`slipchain.engine.backends.implicit`; every geometry and material: with 'prony' the Maxwell
     arms are in the backward-Euler system and the explicit steps are the fold step at dt);
-    ``krylov_preconditioner`` (integrator = 'implicit' on the slab and half-space): 'jacobi' (the
+    ``krylov_preconditioner`` (integrator = 'implicit' on the slab, half-space and chain2d): 'jacobi' (the
     default) or 'additive', the conjugate gradients' preconditioner in each backward-Euler solve
-    (:meth:`slipchain.engine.backends.implicit.SlabSystem.precondition`);
+    (:meth:`slipchain.engine.backends.implicit.SlabSystem.precondition`,
+    :meth:`slipchain.engine.backends.implicit.LatticeSystem.precondition`);
     ``stop_at_runaway`` (dead weight with ``t_decide`` and a ramp ``t_ramp`` of at least half of it: a
     slowly loaded run; with the weight at once or released within a few of the tester top's ringing
     periods the top overshoots to 0.03-0.15 m/s and comes back, docs/tester-3d): the run stops before ``t_decide`` once the
@@ -333,9 +334,9 @@ class Config(BaseModel):
                                       f"integrator = '{self.integrator}', geometry = '{self.geometry}', material = "
                                       f"'{self.material}')"))
         if self.krylov_preconditioner != OFF["krylov_preconditioner"] and (
-                self.integrator != "implicit" or self.geometry not in ("slab", "halfspace")):
+                self.integrator != "implicit" or self.geometry not in ("slab", "halfspace", "chain2d")):
             raise ValueError(_message("krylov_preconditioner", self.krylov_preconditioner, "absent (or 'jacobi') unless "
-                                      "integrator = 'implicit' with geometry = 'slab' or 'halfspace' (it preconditions "
+                                      "integrator = 'implicit' with geometry = 'slab', 'halfspace' or 'chain2d' (it preconditions "
                                       "their backward-Euler solves; here integrator = "
                                       f"'{self.integrator}', geometry = '{self.geometry}')"))
         if self.t_max_cycles and (self.t_total is not None or self.dead_weight is not None

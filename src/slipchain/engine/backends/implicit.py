@@ -955,7 +955,7 @@ class LatticeSystem:
     (1 + 4 s_x + 4 s_y) + h**2 (4 K_L s_x + 4 K_LY s_y + K_T + K_d), s = sin**2(pi k/L)): with Jacobi
     alone its lattice Laplacian took 25 conjugate-gradient iterations per solve on 64 x 64."""
 
-    def __init__(self, p, shape, fft, arms: Arms | None = None):
+    def __init__(self, p, shape, fft, arms: Arms | None = None, preconditioner: str = "jacobi"):
         self.p = p
         self.shape = shape
         self.fft = fft
@@ -963,7 +963,10 @@ class LatticeSystem:
         self.size = 2 * self.n
         self.moves_upper = True  # the upper layer is a state of the step (TR-BDF2's stages)
         self.ly = int(shape[1])
-        self.cg_units = 1
+        if preconditioner not in ("jacobi", "additive"):
+            raise ValueError(f"preconditioner {preconditioner!r}: expected 'jacobi' or 'additive'")
+        self.additive = preconditioner == "additive"
+        self.cg_units = 2 if self.additive else 1  # FFT pairs per conjugate-gradient iteration (the cost rule's units)
         self.work = [np.empty(self.n) for _ in range(6)]
         self.arms = arms  # material 'prony': the bulk springs (not K_d) carry the arms (:class:`Arms`)
         kx = np.arange(shape[0])[:, None]
@@ -995,6 +998,13 @@ class LatticeSystem:
         self.upper_symbol = 1.0 / (p[P_ML] + h * p[P_META] * (1.0 + 4.0 * self.sx + 4.0 * self.sy)
                                    + h2 * (4.0 * p[P_KL] * self.sx + 4.0 * p[P_KLY] * self.sy + p[P_KT] + p[P_KD])
                                    + hs * (4.0 * p[P_KL] * self.sx + 4.0 * p[P_KLY] * self.sy + p[P_KT]))
+        if self.additive:  # the contact-free operator, per Fourier mode a 2 x 2 block over the two layers, inverted
+            lap = 1.0 + 4.0 * self.sx + 4.0 * self.sy  # the dampers' stencil (m eta on every spring, K_T's included)
+            a = p[P_M] + h * p[P_META] * lap + (h2 + hs) * (4.0 * p[P_K] * self.sx + 4.0 * p[P_KY] * self.sy + p[P_KT])
+            b = 1.0 / self.upper_symbol
+            c = h * p[P_META] + (h2 + hs) * p[P_KT]  # the layers' coupling (minus the off-diagonal entry)
+            det = a * b - c * c
+            self.block_inverse = (b / det, c / det, a / det)
         ny = 2.0 if self.shape[1] > 1 else 0.0  # y neighbours (Ly = 1: the block itself, no bond)
         self.diag_u = p[P_M] + h * p[P_META] * (3.0 + ny) + h2 * (2.0 * p[P_K] + ny * p[P_KY] + p[P_KT])
         rhs = np.concatenate([p[P_M] * ur + h * fx, p[P_ML] * Ur + h * (fX + g)])
@@ -1017,9 +1027,24 @@ class LatticeSystem:
         return w
 
     def precondition(self, r, jd):
+        """'jacobi' (by layer): the upper layer by its own block's exact inverse (Fourier space), the interface
+        layer by its diagonal with the contacts' h f'. 'additive' (by site, as :meth:`SlabSystem.precondition`):
+        the contact blocks by that diagonal, and every other block (the free interface blocks and the whole
+        upper layer) by the exact inverse of the contact-free operator (per Fourier mode a 2 x 2 block over the
+        two layers, coupled by K_T and its damper) applied to the residual restricted to them and restricted
+        back, P_f G^-1 P_f + P_c D^-1: at low load, where few blocks carry contacts, the free blocks' coupling
+        through the lattice and to the upper layer is what the diagonal misses. Symmetric positive definite
+        either way."""
         n, f = self.n, self.fft
-        zU = f.irfft2(self.upper_symbol * f.rfft2(r[n:].reshape(self.shape)), s=self.shape).reshape(n)
-        return np.concatenate([r[:n] / (self.diag_u + jd[:n]), zU])
+        if not self.additive:
+            zU = f.irfft2(self.upper_symbol * f.rfft2(r[n:].reshape(self.shape)), s=self.shape).reshape(n)
+            return np.concatenate([r[:n] / (self.diag_u + jd[:n]), zU])
+        free = jd[:n] == 0.0
+        shp = (2, *self.shape)
+        ru, rU = f.rfft2(np.stack([np.where(free, r[:n], 0.0), r[n:]]).reshape(shp), axes=(1, 2))
+        ia, ic, ib = self.block_inverse
+        z = f.irfft2(np.stack([ia * ru + ic * rU, ic * ru + ib * rU]), s=self.shape, axes=(1, 2)).reshape(2, n)
+        return np.concatenate([np.where(free, z[0], r[:n] / (self.diag_u + jd[:n])), z[1]])
 
     def unknowns(self, u, U):
         return np.concatenate([u, U])
