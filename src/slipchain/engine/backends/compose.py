@@ -771,25 +771,6 @@ def _krylov_explicit(body: str):
                    (body,))
 
 
-# TR-BDF2's controller (implicit_scheme = 'trbdf2'): after a step that doubles, at most this many doublings more
-TRBDF2_MAX_CLIMB = 3
-
-
-def trbdf2_climb(err: float, bal: float, scale: float, ctrl: np.ndarray, level: int) -> int:
-    """Doublings beyond the one :func:`implicit_verdict` granted a TR-BDF2 step (implicit_scheme = 'trbdf2'
-    only: backward Euler's controller is unchanged): the error estimate grows like h**2 in smooth creep
-    (h/2 times the change of the acceleration), so while err 4**k stays below STEP_UP times the tolerance,
-    the energy residual times 8**k below half its bound (a conservative h**3) and the level below the
-    implicit top, the step may double k times more, at most TRBDF2_MAX_CLIMB. After each slip event the
-    level climbs back from the explicit top; one doubling per step cost chain2d at low load most of its
-    tries (docs/performance.md, "TR-BDF2")."""
-    k = 0
-    while (k < TRBDF2_MAX_CLIMB and err * 4.0 ** (k + 1) < STEP_UP * ctrl[0]
-           and abs(bal) * 8.0 ** (k + 1) < 0.5 * ctrl[CTRL_ENERGY] * scale and level + k + 1 <= int(ctrl[CTRL_TOP_IMPLICIT])):
-        k += 1
-    return k
-
-
 def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft=None) -> ChunkOutput:
     """integrator = 'implicit' on the slab, half-space and chain2d (issue 27; either drive, material
     'elastic'): row after row, each step as the implicit stepper's controller says
@@ -914,8 +895,6 @@ def krylov_implicit_advance(batch: Batch, n_samples: int, sample_steps: int, fft
                 cut = w < (1 << lv)
                 if not implicit_verdict(cr, ctrl, its, err, bal, scale, lv, cut):
                     continue
-                if trbdf2 and cr[CT_LEVEL] == lv + 1 and err > 0.0:
-                    cr[CT_LEVEL] = lv + 1 + trbdf2_climb(err, bal, scale, ctrl, lv + 1)
                 # a full step, not climbing, and dearer than the explicit steps it replaced: hand back
                 if not cut and cr[CT_LEVEL] <= lv and spent * (1 << int(ctrl[1])) > w and cr[CT_LEVEL] > ctrl[1]:
                     waits = min(max(1, 2 * waits), MAX_BACKOFF)
