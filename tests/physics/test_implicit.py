@@ -25,7 +25,7 @@ from slipchain.engine.backends import implicit
 from slipchain.engine.backends.base import kernel_params
 from slipchain.engine.backends.host import CPUBackend
 from slipchain.model.config import ConfigError, make_config
-from slipchain.model.stability import be_amplification, chain_modes
+from slipchain.model.stability import be_amplification, chain_modes, trbdf2_amplification
 from slipchain.model.system import build_system, initial_state
 
 EPS1 = dict(N=31, theta=1.0, eta_c=1e5, v_d=1e-3, epsilon=1.0, seed=3, start="steady", dt=1e-7)
@@ -102,9 +102,11 @@ def test_contact_free_chain_relaxes_as_the_linear_analysis_says(h):
     assert np.abs(np.linalg.eigvals(be_amplification(B, D, 10.0))).max() < 1e-5
 
 
-def _slab_mode_step(cfg, kx: int, ky: int, h: float, steps: int):
-    """Backward Euler steps of the contact-free slab (no drive) from one Fourier mode cos(q.r) with
-    given amplitudes (spectral_be_try without contacts); the modal (x/h, u) before and after."""
+def _slab_mode_steps(cfg, kx: int, ky: int, h: float, steps: int, amp, scheme: str = "backward-euler"):
+    """Steps of the contact-free slab (no drive) from one Fourier mode cos(q.r) with amplitudes ``amp`` of
+    (x, u), by backward Euler (:func:`implicit.krylov_be_try` without contacts) or TR-BDF2
+    (:func:`implicit.krylov_trbdf2_try`); the modal (x, u) before and after, and the mode's omega**2 and
+    damping rate."""
     system = build_system(cfg)
     batch = Batch.pack([system], [initial_state(system)])
     p = batch.params[0].copy()
@@ -113,18 +115,23 @@ def _slab_mode_step(cfg, kx: int, ky: int, h: float, steps: int):
     system = implicit.SlabSystem(implicit.SpectralOperator(batch.kernel[0], batch.shape, scipy.fft), p)
     ix, iy = np.meshgrid(np.arange(cfg.N), np.arange(cfg.Ly), indexing="ij")
     shape = np.cos(2 * np.pi * (kx * ix / cfg.N + ky * iy / cfg.Ly)).ravel()
-    amp = np.array([2e-6, 3e-3])
     x, u = amp[0] * shape, amp[1] * shape
     none_i, none_f = np.zeros(0, dtype=np.int64), np.zeros(0)
     un, Un, zero = np.empty(x.size), np.empty(x.size), np.zeros(x.size)
     for s in range(steps):
-        its, _ = implicit.krylov_be_try(system, p, x, u, zero, zero, none_i, none_f, 0, np.zeros((S.N_YS, 0)), un, Un, h,
-                                        (s + 1) * h, 1e-5, none_f.copy(), none_f.copy(), np.zeros(2 * x.size), False)
+        args = (system, p, x, u, zero, zero, none_i, none_f, 0, np.zeros((S.N_YS, 0)), un, Un, h, (s + 1) * h, 1e-5,
+                none_f.copy(), none_f.copy(), np.zeros(2 * x.size), False)
+        if scheme == "trbdf2":
+            its, _, step = implicit.krylov_trbdf2_try(*args)
+            x = step.xB + step.h2 * un
+        else:
+            its, _ = implicit.krylov_be_try(*args)
+            x = x + h * un
         assert its > 0
-        x, u = x + h * un, un.copy()
+        u = un.copy()
     proj = shape / (shape @ shape)
     k = batch.kernel[0][kx, ky]  # a**2 k(q) of this mode (ky <= Ly/2: on the rfft2 grid)
-    return np.array([amp[0] / h, amp[1]]), np.array([proj @ x / h, proj @ u]), k / cfg.m, p[S.P_META] / cfg.m
+    return np.asarray(amp), np.array([proj @ x, proj @ u]), k / cfg.m, p[S.P_META] / cfg.m
 
 
 @pytest.mark.parametrize("h", [1e-7, 1e-4, 1e-1])
@@ -135,10 +142,27 @@ def test_contact_free_slab_relaxes_as_the_linear_analysis_says(h):
     gamma), from below the explicit stable step to six decades above it."""
     cfg = make_config(geometry="slab", N=8, Ly=8, integrator="implicit", dt=1e-7, epsilon=1.0)
     for kx, ky in ((1, 0), (2, 3), (4, 4)):
-        start, end, w2, gamma = _slab_mode_step(cfg, kx, ky, h, 4)
-        A = be_amplification(np.array([[[w2]]]), np.array([[[gamma]]]), h)[0]
+        start, end, w2, gamma = _slab_mode_steps(cfg, kx, ky, h, 4, (2e-6, 3e-3))
+        A = be_amplification(np.array([[[w2]]]), np.array([[[gamma]]]), h)[0]  # in (x/h, u)
+        start, end = start / np.array([h, 1.0]), end / np.array([h, 1.0])
         want = np.linalg.matrix_power(A, 4) @ start
         assert np.allclose(end, want, rtol=1e-7, atol=1e-10 * np.abs(start).max()), (kx, ky, end, want)
+
+
+@pytest.mark.parametrize("h", [1e-7, 1e-4, 1e-1])
+def test_contact_free_slab_follows_the_trbdf2_analysis(h):
+    """implicit_scheme = 'trbdf2' (tests/physics/test_trbdf2.py): each Fourier mode of the contact-free slab
+    is carried by TR-BDF2's amplification matrix of its scalar oscillator (the matrices of the stability
+    analysis, :func:`slipchain.model.stability.trbdf2_amplification`), from below the explicit stable step to
+    six decades above it: the two stages, their shifted base states and the commit from the BDF2 stage's
+    base are the scheme."""
+    cfg = make_config(geometry="slab", N=8, Ly=8, integrator="implicit", dt=1e-7, epsilon=1.0, implicit_scheme="trbdf2")
+    for kx, ky in ((1, 0), (2, 3), (4, 4)):
+        start, end, w2, gamma = _slab_mode_steps(cfg, kx, ky, h, 4, (2e-9, 3e-3), "trbdf2")
+        A = trbdf2_amplification(np.array([[[w2]]]), np.array([[[gamma]]]), h)[0]  # in (x, u)
+        want = np.linalg.matrix_power(A, 4) @ start
+        scale = np.array([np.sqrt(w2), 1.0])  # compared in (omega x, u): both velocities
+        assert np.allclose(end * scale, want * scale, rtol=1e-7, atol=1e-9 * np.abs(start * scale).max()), (kx, ky)
 
 
 def test_slab_agrees_with_the_adaptive_step_at_the_physical_contact_stiffness():
@@ -387,6 +411,25 @@ def test_krylov_tries_cost_at_most_a_fraction_of_the_explicit_steps_they_replace
     assert sum(spent) < cfg["t_total"] / cfg["dt"] / 3, (len(spent), sum(spent))
 
 
+def _fewer_iterations_to_the_dense_solution(systems, jd, rhs, want):
+    """Conjugate gradients on A + diag(jd) with each system's preconditioner reach the dense solve's ``want``;
+    the additive one in under 0.6 of Jacobi's iterations."""
+    from scipy.sparse.linalg import LinearOperator, cg
+
+    size = rhs.size
+    its = {}
+    for name, s in systems.items():
+        count = [0]
+        jac = LinearOperator((size, size), matvec=lambda w, s=s: s.matvec(w) + jd * w, dtype=float)
+        pre = LinearOperator((size, size), matvec=lambda r, s=s: s.precondition(r, jd), dtype=float)
+        got, info = cg(jac, rhs, rtol=implicit.CG_RTOL, atol=0.0, maxiter=implicit.CG_MAXITER, M=pre,
+                       callback=lambda _, c=count: c.__setitem__(0, c[0] + 1))
+        assert info == 0
+        assert np.abs(got - want).max() < 1e-7 * np.abs(want).max(), name
+        its[name] = count[0]
+    assert its["additive"] < 0.6 * its["jacobi"], its
+
+
 def test_additive_preconditioner_is_symmetric_positive_definite_and_solves_the_same_system():
     """krylov_preconditioner = 'additive' on the slab under the dead weight (the plate's bordering row
     included): the preconditioner is a symmetric positive definite operator (conjugate gradients need
@@ -394,7 +437,6 @@ def test_additive_preconditioner_is_symmetric_positive_definite_and_solves_the_s
     conjugate gradients with it reach the solution of a dense solve of the same matrix (assembled from
     its products) in fewer iterations than with Jacobi, at low load (a few contact blocks)."""
     import scipy.fft
-    from scipy.sparse.linalg import LinearOperator, cg
 
     cfg = make_config(geometry="slab", N=16, Ly=16, N_L=5, theta=0.05, integrator="implicit", dt=1e-7, epsilon=1.0,
                       dead_weight=0.3, krylov_preconditioner="additive")
@@ -422,17 +464,7 @@ def test_additive_preconditioner_is_symmetric_positive_definite_and_solves_the_s
     dense = np.stack([add.matvec(e) + jd * e for e in np.eye(n + 1)], axis=1)
     rhs = rng.normal(size=n + 1)
     want = np.linalg.solve(dense, rhs)
-    its = {}
-    for name, s in systems.items():
-        count = [0]
-        jac = LinearOperator((n + 1, n + 1), matvec=lambda w: s.matvec(w) + jd * w, dtype=float)
-        pre = LinearOperator((n + 1, n + 1), matvec=lambda r, s=s: s.precondition(r, jd), dtype=float)
-        got, info = cg(jac, rhs, rtol=implicit.CG_RTOL, atol=0.0, maxiter=implicit.CG_MAXITER, M=pre,
-                       callback=lambda _, c=count: c.__setitem__(0, c[0] + 1))
-        assert info == 0
-        assert np.abs(got - want).max() < 1e-7 * np.abs(want).max(), name
-        its[name] = count[0]
-    assert its["additive"] < 0.6 * its["jacobi"], its
+    _fewer_iterations_to_the_dense_solution(systems, jd, rhs, want)
 
 
 def test_additive_preconditioner_on_chain2d_is_symmetric_positive_definite_and_solves_the_same_system():
@@ -441,7 +473,6 @@ def test_additive_preconditioner_on_chain2d_is_symmetric_positive_definite_and_s
     reach a dense solve's solution of the same matrix (assembled from its products) in fewer iterations than
     with the layer-wise Jacobi, at low load."""
     import scipy.fft
-    from scipy.sparse.linalg import LinearOperator, cg
 
     cfg = make_config(geometry="chain2d", N=12, Ly=10, N_L=5, theta=0.05, integrator="implicit", dt=1e-7, epsilon=1.0,
                       krylov_preconditioner="additive")
@@ -467,17 +498,7 @@ def test_additive_preconditioner_on_chain2d_is_symmetric_positive_definite_and_s
     dense = np.stack([add.matvec(e) + jd * e for e in np.eye(2 * n)], axis=1)
     rhs = rng.normal(size=2 * n)
     want = np.linalg.solve(dense, rhs)
-    its = {}
-    for name, s in systems.items():
-        count = [0]
-        jac = LinearOperator((2 * n, 2 * n), matvec=lambda w: s.matvec(w) + jd * w, dtype=float)
-        pre = LinearOperator((2 * n, 2 * n), matvec=lambda r, s=s: s.precondition(r, jd), dtype=float)
-        got, info = cg(jac, rhs, rtol=implicit.CG_RTOL, atol=0.0, maxiter=implicit.CG_MAXITER, M=pre,
-                       callback=lambda _, c=count: c.__setitem__(0, c[0] + 1))
-        assert info == 0
-        assert np.abs(got - want).max() < 1e-7 * np.abs(want).max(), name
-        its[name] = count[0]
-    assert its["additive"] < 0.6 * its["jacobi"], its
+    _fewer_iterations_to_the_dense_solution(systems, jd, rhs, want)
 
 
 @pytest.mark.parametrize("case", ["slab", "halfspace", "chain2d", "prony-dead-weight", "prony-top"])

@@ -2,7 +2,8 @@
 chain2d, in place of backward Euler.
 
 Independent checks: a contact-free step against the scheme's own linear analysis
-(:func:`slipchain.model.stability.trbdf2_amplification`), far beyond the explicit stable step; second
+(:func:`slipchain.model.stability.trbdf2_amplification`), far beyond the explicit stable step
+(tests/physics/test_implicit.py, beside backward Euler's); second
 order in the step through creep (the error against a finer step falls fourfold per halving, where
 backward Euler's halves); agreement with the explicit adaptive step at the physical contact stiffness
 through the start event and creep under the spring drive (slab, chain2d) and the dead weight; its
@@ -16,57 +17,15 @@ import copy
 
 import numpy as np
 import pytest
-import scipy.fft
 
 import slipchain as sc
-from slipchain.engine import scheme as S
-from slipchain.engine.backends import Batch, implicit
+from slipchain.engine.backends import Batch
 from slipchain.engine.backends.host import CPUBackend
 from slipchain.model.config import ConfigError, make_config
 from slipchain.model.stability import be_amplification, trbdf2_amplification
 from slipchain.model.system import build_system, initial_state
 
 EPS1 = dict(N=8, Ly=8, N_L=5, theta=1.0, eta_c=1e5, v_d=1e-3, epsilon=1.0, seed=3, start="steady", dt=1e-7)
-
-
-def _slab_mode_steps(cfg, kx: int, ky: int, h: float, steps: int):
-    """TR-BDF2 steps of the contact-free, undriven slab from one Fourier mode cos(q.r); the modal (x, u)
-    before and after, and the mode's omega**2 and damping rate."""
-    system = build_system(cfg)
-    batch = Batch.pack([system], [initial_state(system)])
-    p = batch.params[0].copy()
-    p[S.P_VD] = 0.0
-    slab = implicit.SlabSystem(implicit.SpectralOperator(batch.kernel[0], batch.shape, scipy.fft), p)
-    ix, iy = np.meshgrid(np.arange(cfg.N), np.arange(cfg.Ly), indexing="ij")
-    shape = np.cos(2 * np.pi * (kx * ix / cfg.N + ky * iy / cfg.Ly)).ravel()
-    amp = np.array([2e-9, 3e-3])
-    x, u = amp[0] * shape, amp[1] * shape
-    none_i, none_f = np.zeros(0, dtype=np.int64), np.zeros(0)
-    un, Un, zero = np.empty(x.size), np.empty(x.size), np.zeros(x.size)
-    for s in range(steps):
-        its, _, step = implicit.krylov_trbdf2_try(slab, p, x, u, zero, zero, none_i, none_f, 0, np.zeros((S.N_YS, 0)),
-                                                  un, Un, h, (s + 1) * h, 1e-5, none_f.copy(), none_f.copy(),
-                                                  np.zeros(2 * x.size), False)
-        assert its > 0
-        x, u = step.xB + step.h2 * un, un.copy()
-    proj = shape / (shape @ shape)
-    k = batch.kernel[0][kx, ky]  # a**2 k(q) of this mode (ky <= Ly/2: on the rfft2 grid)
-    return amp, np.array([proj @ x, proj @ u]), k / cfg.m, p[S.P_META] / cfg.m
-
-
-@pytest.mark.parametrize("h", [1e-7, 1e-4, 1e-1])
-def test_contact_free_slab_follows_the_trbdf2_analysis(h):
-    """Each Fourier mode of the contact-free slab is carried by TR-BDF2's amplification matrix of its
-    scalar oscillator (omega**2 = a**2 k(q)/m, damping rate gamma; the same matrices the stability
-    analysis uses), from below the explicit stable step to six decades above it: the two stages, their
-    shifted base states and the commit from the BDF2 stage's base are the scheme."""
-    cfg = make_config(geometry="slab", N=8, Ly=8, integrator="implicit", dt=1e-7, epsilon=1.0, implicit_scheme="trbdf2")
-    for kx, ky in ((1, 0), (2, 3), (4, 4)):
-        start, end, w2, gamma = _slab_mode_steps(cfg, kx, ky, h, 4)
-        A = trbdf2_amplification(np.array([[[w2]]]), np.array([[[gamma]]]), h)[0]
-        want = np.linalg.matrix_power(A, 4) @ start
-        scale = np.array([1.0, np.sqrt(w2)])  # compare in (omega x, u): both velocities
-        assert np.allclose(end * scale, want * scale, rtol=1e-7, atol=1e-9 * np.abs(start * scale).max()), (kx, ky, end, want)
 
 
 def test_numerical_dissipation_of_a_resolved_mode_is_fourth_order():
