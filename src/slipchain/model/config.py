@@ -33,14 +33,14 @@ ALLOWED: dict[str, str] = {
     "step_tol": "a number > 0 (integrator = 'adaptive' or 'implicit': largest local velocity error per step, in "
                 "units of v_d)",
     "krylov_preconditioner": "one of 'jacobi' (the default: the diagonal), 'additive' (by site: the diagonal on "
-                             "the contact blocks, the body's (chain2d: the interface layer's) exact Fourier inverse on "
+                             "the contact blocks, the body's (chain2d: both layers') exact Fourier inverse on "
                              "the free ones; fewer conjugate-gradient iterations at low load, each dearer), only with "
                              "integrator = 'implicit' on the slab, half-space or chain2d",
     "energy_tol": "a number in (0, 0.1] (integrator = 'implicit': largest energy residual of a backward-Euler step, "
                   "its numerical dissipation, as a fraction of the magnitudes of the step's works; default 1e-4)",
-    "implicit_scheme": "one of 'backward-euler' (the default), 'trbdf2' (the second-order L-stable TR-BDF2 step above "
-                       "the explicit levels), 'trbdf2' only with integrator = 'implicit' on the slab, half-space or "
-                       "chain2d with material = 'elastic'",
+    "implicit_scheme": "one of 'backward-euler' (the default) or 'trbdf2' (the second-order L-stable TR-BDF2 step "
+                       "above the explicit levels; only with integrator = 'implicit' on the slab, half-space or "
+                       "chain2d with material = 'elastic')",
     "min_cycles": "an integer >= 0 (automatic length: slip cycles the steady window must hold; 0 for none)",
     "tau_f": "a number > 0 (frictional shear stress, Pa)",
     "c": "a number >= 0",
