@@ -74,6 +74,7 @@ import numpy as np
 
 from ...model.config import ENERGY_TOL
 from ...model.elastic import twoport_energy
+from ...model.stability import TRBDF2_GAMMA
 from .cpu import scaled_exp
 from .viscoelastic import bulk_forces, combined_fields
 from ..scheme import (FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_M, P_META, P_ML, P_VD,
@@ -1182,7 +1183,7 @@ def krylov_be_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol,
     return -1, cg_its[0]
 
 
-GAMMA = 2.0 - math.sqrt(2.0)  # TR-BDF2's stage: the trapezoidal rule to t + gamma h (the BDF2 weights then equal)
+GAMMA = TRBDF2_GAMMA  # TR-BDF2's stage fraction (the stability analysis's): the trapezoidal rule to t + gamma h
 
 
 @nb.njit
