@@ -126,6 +126,16 @@ def be_amplification(B: np.ndarray, D: np.ndarray, h: float) -> np.ndarray:
 TRBDF2_GAMMA = 2.0 - math.sqrt(2.0)  # TR-BDF2's stage fraction: L-stable, and both stages share one matrix form
 
 
+def trbdf2_weights(h: float, gamma: float = TRBDF2_GAMMA) -> tuple[float, float, float, float]:
+    """TR-BDF2's step sizes and BDF2 weights for a step h: (h1, h2, w1, w0) with h1 = gamma h/2 the
+    trapezoidal stage's backward-Euler-like step, h2 = (1 - gamma)/(2 - gamma) h the BDF2 stage's, and
+    the BDF2 base y_g w1 - y_n w0, w1 = 1/(gamma (2 - gamma)), w0 = (1 - gamma)^2/(gamma (2 - gamma)).
+    The one statement of them: :func:`trbdf2_amplification` and the stepper
+    (:func:`slipchain.engine.backends.implicit.krylov_trbdf2_try`) both read them here."""
+    return (0.5 * gamma * h, (1.0 - gamma) / (2.0 - gamma) * h, 1.0 / (gamma * (2.0 - gamma)),
+            (1.0 - gamma) ** 2 / (gamma * (2.0 - gamma)))
+
+
 def trbdf2_amplification(B: np.ndarray, D: np.ndarray, h: float, gamma: float = TRBDF2_GAMMA) -> np.ndarray:
     """TR-BDF2's amplification matrices (modes, 2d, 2d) in (x, v) for the linear part
     y' = J y, J = [[0, I], [-B, -D]] (Bank et al. 1985; Hosea and Shampine 1996): a trapezoidal stage
@@ -139,18 +149,15 @@ def trbdf2_amplification(B: np.ndarray, D: np.ndarray, h: float, gamma: float = 
     Second order, A-stable and, with gamma = 2 - sqrt(2), L-stable (radius ~ 4.8/(h omega) as h -> inf).
     Its numerical dissipation on a resolved undamped mode is ~7e-3 (h omega)^4 of the energy per step,
     against (h omega)^2 for backward Euler (:func:`be_amplification`); on motion linear in time (creep)
-    the trapezoidal stage is exact. Analysis for the issue-27 question of a less dissipative implicit
-    step (docs/numerics.md, "The implicit stepper"); no stepper uses it yet."""
+    the trapezoidal stage is exact. The analysis of ``Config.implicit_scheme = 'trbdf2'`` (issue 27,
+    docs/numerics.md "TR-BDF2"), whose stepper takes the same weights (:func:`trbdf2_weights`)."""
     n, d, _ = B.shape
     eye = np.broadcast_to(np.eye(2 * d), (n, 2 * d, 2 * d))
     J = np.zeros((n, 2 * d, 2 * d))
     J[:, :d, d:] = np.eye(d)
     J[:, d:, :d] = -B
     J[:, d:, d:] = -D
-    c1 = 0.5 * gamma * h
-    c2 = (1.0 - gamma) / (2.0 - gamma) * h
-    w1 = 1.0 / (gamma * (2.0 - gamma))
-    w0 = (1.0 - gamma) ** 2 / (gamma * (2.0 - gamma))
+    c1, c2, w1, w0 = trbdf2_weights(h, gamma)
     stage = np.linalg.solve(eye - c1 * J, eye + c1 * J)
     return np.linalg.solve(eye - c2 * J, w1 * stage - w0 * eye)
 
@@ -326,5 +333,5 @@ def slab_modes(cfg) -> tuple[np.ndarray, np.ndarray]:
     return w2[:, None, None], np.full((w2.size, 1, 1), cfg.radiation_damping_rate)
 
 
-__all__ = ["RADIUS_TOL", "TRBDF2_GAMMA", "trbdf2_amplification", "amplification", "prony_amplification", "prony_stable_step", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
+__all__ = ["RADIUS_TOL", "TRBDF2_GAMMA", "trbdf2_amplification", "trbdf2_weights", "amplification", "prony_amplification", "prony_stable_step", "chain_modes", "largest_stable_step", "plate_mode", "scalar_stable_step",
            "slab_modes", "spectral_radius", "stable_step"]

@@ -74,7 +74,7 @@ import numpy as np
 
 from ...model.config import ENERGY_TOL
 from ...model.elastic import twoport_energy
-from ...model.stability import TRBDF2_GAMMA
+from ...model.stability import TRBDF2_GAMMA, trbdf2_weights
 from .cpu import scaled_exp
 from .viscoelastic import bulk_forces, combined_fields
 from ..scheme import (FASTMATH, LN10, P_AMP, P_C, P_ETAC, P_FCONST, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_M, P_META, P_ML, P_VD,
@@ -444,14 +444,21 @@ def damping_power(dampx, dampX, u, U):
 
 
 @nb.njit
+def contact_force(uk, vsk, amp, c, meta_c):
+    """Eq. (1) with its damping, f = sign(u) amp exp(-c log10(|u|/v_s)^2) + meta_c u, at a block's
+    velocity u != 0 (the one statement for :func:`contact_power_at` and :func:`contact_forces_at`)."""
+    y = math.log10(abs(uk) / vsk)
+    return math.copysign(amp * math.exp(-c * y * y), uk) + meta_c * uk
+
+
+@nb.njit
 def contact_power_at(nc, st, vs, u, amp, c, meta_c):
     """sum_k f_k u_k with eq. (1) (and its damping) at the blocks' velocities ``u``."""
     pw = 0.0
     for k in range(nc):
         uk = u[st[k]]
         if uk != 0.0:
-            y = math.log10(abs(uk) / vs[k])
-            pw += (math.copysign(amp * math.exp(-c * y * y), uk) + meta_c * uk) * uk
+            pw += contact_force(uk, vs[k], amp, c, meta_c) * uk
     return pw
 
 
@@ -1193,17 +1200,18 @@ def contact_forces_at(nc, st, vs, u, amp, c, meta_c, out):
     for k in range(nc):
         uk = u[st[k]]
         if uk != 0.0:
-            y = math.log10(abs(uk) / vs[k])
-            out[st[k]] = math.copysign(amp * math.exp(-c * y * y), uk) + meta_c * uk
+            out[st[k]] = contact_force(uk, vs[k], amp, c, meta_c)
 
 
 class TrBdf2Step:
     """One TR-BDF2 step's states for its balance and commit: the start (x, u, X, U) at t0, the
     trapezoidal stage's end at t0 + gamma h, and the BDF2 stage's base positions (xB, XB), from which
-    the positions at the step's end are xB + h2 u', XB + h2 U' (h2 = (1 - gamma)/(2 - gamma) h)."""
+    the positions at the step's end are xB + h2 u', XB + h2 U' (h2 = (1 - gamma)/(2 - gamma) h); the
+    times t0, t_g = t0 + gamma h, t1."""
 
-    def __init__(self, start, stage, xB, XB, h2, t0, t1):
-        self.start, self.stage, self.xB, self.XB, self.h2, self.t0, self.t1 = start, stage, xB, XB, h2, t0, t1
+    def __init__(self, start, stage, xB, XB, h2, t0, tg, t1):
+        self.start, self.stage, self.xB, self.XB, self.h2 = start, stage, xB, XB, h2
+        self.t0, self.tg, self.t1 = t0, tg, t1
 
 
 def krylov_trbdf2_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, tol, yk, sk, ap, have):
@@ -1226,7 +1234,7 @@ def krylov_trbdf2_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, 
     iterations, :class:`TrBdf2Step` or None)."""
     n = xr.size
     g = GAMMA
-    h1 = 0.5 * g * h
+    h1, h2, c1, c2 = trbdf2_weights(h, g)
     t0 = t1 - h
     tg = t0 + g * h
     upper = system.moves_upper  # the upper layer (chain2d) or the plate (dead weight) is a state of the step
@@ -1243,9 +1251,6 @@ def krylov_trbdf2_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, 
     ug, Ug = un.copy(), Un.copy()
     xg = xb + h1 * ug
     Xg = Xb + h1 * Ug if upper else Xr
-    c1 = 1.0 / (g * (2.0 - g))
-    c2 = (1.0 - g) ** 2 / (g * (2.0 - g))
-    h2 = (1.0 - g) / (2.0 - g) * h
     xB, uB = c1 * xg - c2 * xr, c1 * ug - c2 * ur
     XB, UB = (c1 * Xg - c2 * Xr, c1 * Ug - c2 * Ur) if upper else (Xr, Ur)
     its2, cg2 = krylov_be_try(system, p, xB, uB, XB, UB, st, vs, nc, ys, un, Un, h2, t1, tol, yk, sk, ap, have,
@@ -1253,7 +1258,7 @@ def krylov_trbdf2_try(system, p, xr, ur, Xr, Ur, st, vs, nc, ys, un, Un, h, t1, 
     if its2 < 0:
         return -1, cg1 + cg2, None
     return its1 + its2, cg1 + cg2, TrBdf2Step((xr.copy(), ur.copy(), Xr.copy(), Ur.copy()), (xg, ug, Xg, Ug), xB, XB, h2,
-                                              t0, t1)
+                                              t0, tg, t1)
 
 
 def trbdf2_balance(system, p, step, un, Un, nc, st, vs):
@@ -1263,8 +1268,7 @@ def trbdf2_balance(system, p, step, un, Un, nc, st, vs):
     amp, c, meta_c = p[P_AMP], p[P_C], p[P_M] * p[P_ETAC]
     x1 = step.xB + step.h2 * un
     X1 = step.XB + step.h2 * Un if system.moves_upper else step.XB
-    tg = step.t0 + GAMMA * (step.t1 - step.t0)
-    states = [(*step.start, step.t0), (*step.stage, tg), (x1, un, X1, Un, step.t1)]
+    states = [(*step.start, step.t0), (*step.stage, step.tg), (x1, un, X1, Un, step.t1)]
     pw = [system.powers(*s) for s in states]
     cp = [contact_power_at(nc, st, vs, s[1], amp, c, meta_c) for s in states]
     f_int = w_damp = w_contact = 0.0
@@ -1280,6 +1284,6 @@ def trbdf2_balance(system, p, step, un, Un, nc, st, vs):
             w_damp, w_contact, 0.0)
 
 
-__all__ = ["ENERGY_TOL", "GAMMA", "NEWTON_MAX", "TrBdf2Step", "contact_forces_at", "krylov_trbdf2_try", "trbdf2_balance", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "TopSlabSystem", "Y_MAX", "be_contacts", "be_try", "be_try_arms", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
+__all__ = ["ENERGY_TOL", "GAMMA", "NEWTON_MAX", "TrBdf2Step", "contact_force", "contact_forces_at", "krylov_trbdf2_try", "trbdf2_balance", "Arms", "LatticeSystem", "SlabSystem", "SpectralOperator", "TopSlabSystem", "Y_MAX", "be_contacts", "be_try", "be_try_arms", "krylov_be_try", "chain_arm_work", "chain_arms", "chain_coefficients", "chain_damping", "contact_power_at",
            "damping_power", "chain_energy", "drive_force_sum", "rising", "solve_cyclic",
            "step_balance"]
