@@ -118,7 +118,7 @@ def test_the_brackets_are_seed_by_seed_and_their_envelope():
     rows = [(0.5, 0, 0.6, "held"), (0.5, 0, 0.7, "runaway"), (0.5, 0, 0.8, "runaway"), (0.5, 1, 0.6, "steady"),
             (0.5, 1, 0.65, "undecided"), (0.5, 1, 0.75, "runaway"), (1.0, 0, 0.8, "held"), (1.0, 0, 0.75, "runaway"),
             (1.0, 1, 0.75, "held")]
-    runs = pd.DataFrame([{"N": 16, "temperature": 20.0, "t_ramp": 1e-3, "theta": th, "seed": sd, "mu_a": m, "outcome": o}
+    runs = pd.DataFrame([{"N": 16, "temperature": 20.0, "eta_c": 1e5, "t_ramp": 1e-3, "theta": th, "seed": sd, "mu_a": m, "outcome": o}
                          for th, sd, m, o in rows])
     per_seed = seed_brackets(runs, ["theta"]).set_index(["theta", "seed"])
     assert per_seed.loc[(0.5, 0), ["lo", "hi"]].tolist() == [0.6, 0.7]
@@ -133,7 +133,7 @@ def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():
     rows = []
     for theta, mus in ((0.1, (0.90, 0.92)), (1.0, (0.95, 0.97))):
         for seed, mu in enumerate(mus):
-            rows.append({"N": 16, "temperature": 20.0, "rate": 0.175, "theta": theta, "seed": seed, "mu_onset": mu,
+            rows.append({"N": 16, "temperature": 20.0, "eta_c": 1e5, "rate": 0.175, "theta": theta, "seed": seed, "mu_onset": mu,
                          "mu_onset_10": mu + 0.01, "during_ramp": True, "resolution": 2e-4})
             rows[-1]["mu_slip"] = mu - 0.002
     rows.append({**rows[0], "mu_onset": 0.5, "during_ramp": False})  # onset after the ramp: an upper bound only
@@ -143,6 +143,11 @@ def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():
     assert s.loc[1.0, "R"] == pytest.approx(0.96 / 0.91) and s.loc[0.1, "R"] == 1.0
     assert s.loc[1.0, "R_se"] == pytest.approx(0.96 / 0.91 * np.hypot(0.01 / 0.96, 0.01 / 0.91))
     assert s.loc[1.0, "R_10"] == pytest.approx(0.97 / 0.92) and s.loc[1.0, "R_slip"] == pytest.approx(0.958 / 0.908)
+    # another contact damping is another group: its runs neither join these means nor share their smallest load
+    other = [{**r, "eta_c": 1e6, "mu_onset": r["mu_onset"] - 0.1} for r in rows if r["theta"] == 1.0 and r["during_ramp"]]
+    both = onset_summary(pd.DataFrame(rows + other)).set_index(["eta_c", "theta"])
+    assert both.loc[(1e5, 1.0), "mu_max"] == pytest.approx(0.96) and both.loc[(1e6, 1.0), "mu_max"] == pytest.approx(0.86)
+    assert both.loc[(1e5, 1.0), "R"] == pytest.approx(0.96 / 0.91) and both.loc[(1e6, 1.0), "R"] == 1.0  # its own smallest load
     # the rate groups the runs: 1.05 over 6 s and 1.015 over 5.8 s are one rate, 1.0 over 6 s another
     from slipchain.analysis.traces import loading_rate
     cfg = make_config(**IDENTICAL, dead_weight=1.05, t_ramp=6.0, t_total=7.0)
@@ -160,10 +165,10 @@ def test_the_branch_is_read_at_a_weight_and_at_a_velocity_by_interpolation():
     rows = []
     for theta, shift in ((0.05, 0.0), (1.0, 0.01)):
         for seed in (0, 1):
-            rows.append(pd.DataFrame({"N": 16, "temperature": 20.0, "rate": 0.175, "theta": theta, "seed": seed,
+            rows.append(pd.DataFrame({"N": 16, "temperature": 20.0, "eta_c": 1e5, "rate": 0.175, "theta": theta, "seed": seed,
                                       "member_id": f"{theta}-{seed}", "mu": mu + shift, "v": v + 1e-5, "v_slip": v}))
     branch = pd.concat(rows, ignore_index=True)
-    steady = pd.DataFrame([{"N": 16, "temperature": 20.0, "theta": 0.05, "seed": 0, "mu_a": 0.95, "velocity": 3e-4,
+    steady = pd.DataFrame([{"N": 16, "temperature": 20.0, "eta_c": 1e5, "theta": 0.05, "seed": 0, "mu_a": 0.95, "velocity": 3e-4,
                             "velocity_sem": 1e-5}])
     c = branch_check(branch, steady)
     assert len(c) == 1 and c["v_ramp"].iloc[0] == pytest.approx(1e-4 * np.exp(20 * 0.05), rel=1e-9)

@@ -193,8 +193,8 @@ def seed_brackets(runs: pd.DataFrame, by: list[str] | tuple[str, ...] = (), stat
     return pd.DataFrame(rows, columns=[*keys, "lo", "hi", "runs", "consistent"])
 
 
-BRACKET_KEYS = ("N", "temperature", "t_ramp", "theta")  # what distinguishes a protocol's group in the brackets
-KEYS = ("N", "temperature", "rate", "theta")  # what distinguishes a group of runs in onset_summary
+BRACKET_KEYS = ("N", "temperature", "eta_c", "t_ramp", "theta")  # what distinguishes a protocol's group in the brackets
+KEYS = ("N", "temperature", "eta_c", "rate", "theta")  # what distinguishes a group of runs in onset_summary
 
 
 def loading_rate(cfg) -> float:
@@ -232,7 +232,7 @@ def _runs(stores: list[str | os.PathLike]):
 
 def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
     """Every completed run of dead-weight sweep stores: its windowed velocities (:func:`window_velocity`;
-    columns store, member_id, N, temperature, theta, seed, mu_a, t_ramp, rate (:func:`loading_rate`),
+    columns store, member_id, N, temperature, eta_c, theta, seed, mu_a, t_ramp, rate (:func:`loading_rate`),
     t_decide, status (the tester's classification the run recorded), t (s), v (m/s)) and, one row per run
     with the same identifying columns, its outcome and end velocity (:func:`run_outcome`: ``outcome``,
     ``v_end``), the tester's steady velocity and its SE where it slid steadily, and its runaway onset
@@ -244,7 +244,7 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
         raise ValueError(f"window has value {window!r}; expected a positive number of seconds (e.g. 0.02)")
     traces, onsets, branches = [], [], []
     for store, mid, cfg, ds in _runs(stores):
-        who = {"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "theta": cfg.theta,
+        who = {"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c, "theta": cfg.theta,
                "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": cfg.t_ramp, "rate": loading_rate(cfg),
                "t_decide": cfg.t_decide, "status": ds.attrs.get("velocity_status", "")}
         time, x = ds["time"].values, ds["X_mean"].values
@@ -263,11 +263,11 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
 
 
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
-    """mu_max per group of runs (:data:`KEYS`: interface, temperature, loading rate, load) from the onsets
+    """mu_max per group of runs (:data:`KEYS`: interface, temperature, contact damping, loading rate, load) from the onsets
     read during the ramp: the mean over runs (seeds; a seed with several weights counts once, its mean), its
     standard error (the seeds' scatter; NaN for one), the mean read at the check threshold
     (``mu_max_10``) and from the interface's first slip (``mu_max_slip``), and R = the group's mean over the
-    smallest load's at the same interface, temperature and rate, with its standard error (independent errors),
+    smallest load's at the same interface, temperature, damping and rate, with its standard error (independent errors),
     ``R_10`` the same at the check threshold and ``R_slip`` from the interface's first slip (how much R depends
     on where and how the onset is read)."""
     ok = onsets[onsets["during_ramp"].astype(bool)]
@@ -370,13 +370,13 @@ def rows_equal(column: pd.Series, value) -> np.ndarray:
 
 def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
     """The ramp's reading against the tester's: for every steady run (``steady``: rows with N, temperature,
-    theta, seed, mu_a, velocity, velocity_sem), the velocity at which the slowly loaded runs of the same
-    interface, temperature, load and seed (``branch``: :func:`ramp_branch` rows with those columns, a
+    eta_c, theta, seed, mu_a, velocity, velocity_sem), the velocity at which the slowly loaded runs of the same
+    interface, temperature, contact damping, load and seed (``branch``: :func:`ramp_branch` rows with those columns, a
     ``member_id`` and the ``rate``) passed that weight (their slip velocity ``v_slip``), interpolated in
     log v between their two windows around it (the last passage, so the start's transient does not
     count), and its ratio to the steady velocity. One row per (steady run, ramp run); none where no ramp run reached the weight."""
     rows = []
-    keys = ["N", "temperature", "theta", "seed"]
+    keys = ["N", "temperature", "eta_c", "theta", "seed"]
     for _, s in steady.iterrows():
         same = branch[np.all([rows_equal(branch[k], s[k]) for k in keys], axis=0) & (branch["v_slip"] > 0)]
         for mid, g in same.groupby("member_id"):
@@ -393,9 +393,9 @@ def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
 def branch_summary(branch: pd.DataFrame, velocities: tuple[float, ...] = BRANCH_VELOCITIES) -> pd.DataFrame:
     """mu on the rising branch at fixed sliding velocities, Figs. 2-3's comparison at a given speed: per run
     of ``branch`` (:func:`ramp_branch`), the weight where its slip velocity ``v_slip`` passed each of
-    ``velocities`` for the last time (interpolated in log v); then per interface, temperature, loading
-    rate and load (:data:`KEYS`) the mean over seeds (a seed's several runs: their mean), its standard error, and R = that mean over the
-    smallest load's at the same interface, temperature and rate (independent errors). One row per group and
+    ``velocities`` for the last time (interpolated in log v); then per interface, temperature, contact
+    damping, loading rate and load (:data:`KEYS`) the mean over seeds (a seed's several runs: their mean), its standard error, and R = that mean over the
+    smallest load's at the same interface, temperature, damping and rate (independent errors). One row per group and
     velocity."""
     per_run = []
     for (mid,), g in branch[branch["v_slip"] > 0].groupby(["member_id"]):
@@ -414,7 +414,7 @@ def branch_summary(branch: pd.DataFrame, velocities: tuple[float, ...] = BRANCH_
 
 def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
     """mu_max under each protocol from its runs' outcomes (:func:`run_outcome`): one row per interface,
-    temperature, ramp and load (:data:`BRACKET_KEYS`) with every seed's bracket (:func:`seed_brackets`),
+    temperature, contact damping, ramp and load (:data:`BRACKET_KEYS`) with every seed's bracket (:func:`seed_brackets`),
     their envelope [the smallest lo, the largest hi] (``lo``, ``hi``: where the seed mean of mu_max can
     lie), the seeds, the runs, and how many seeds' runs are inconsistent (a held or steady weight at or
     above a runaway one)."""

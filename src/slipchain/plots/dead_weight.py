@@ -151,8 +151,8 @@ STATUS_STYLE = {"steady": "-", "runaway": "--", "held": ":", "undecided": "-."} 
 
 
 def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: float, out: str | os.PathLike) -> list[Path]:
-    """The top's velocity against time, one panel per theta (a row of panels per release time t_ramp where
-    the runs have several, so that one weight's colour means one run per panel), one line per run coloured
+    """The top's velocity against time, one panel per theta (a row of panels per release time t_ramp and
+    contact damping eta_c where the runs have several, so that one weight's colour means one run per panel), one line per run coloured
     by its applied mu_a, styled by its outcome (:func:`slipchain.analysis.traces.run_outcome`: solid
     steady, dashed runaway, dotted held, dash-dotted undecided); the decision's start (t_decide) and the
     ramp's end as vertical lines. The velocity axis is symmetric-logarithmic (linear within 1e-5 m/s of
@@ -161,20 +161,22 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     :func:`slipchain.analysis.traces.velocity_traces`."""
     plt = pyplot()
     thetas = sorted(traces["theta"].unique())
-    ramps = sorted(traces.groupby("t_ramp", dropna=False).groups)
+    ramps = sorted(traces.groupby(["t_ramp", "eta_c"], dropna=False).groups)  # a row per release (and damping)
+    dampings = traces["eta_c"].nunique() > 1
     fig, axes = plt.subplots(len(ramps), len(thetas), figsize=(4.0 * len(thetas) + 1.6, 0.4 + 3.8 * len(ramps)),
                              sharey=True, squeeze=False)
     weights = sorted(traces["mu_a"].unique())
     cmap = plt.cm.plasma(np.linspace(0.0, 0.85, max(len(weights), 2)))
     colors = dict(zip(weights, cmap))
     outcome = dict(zip(onsets["member_id"], onsets["outcome"]))
-    for row, t_ramp in zip(axes, ramps):
+    for row, (t_ramp, eta_c) in zip(axes, ramps):
         for ax, th in zip(row, thetas):
-            cur = traces[np.isclose(traces["theta"], th) & rows_equal(traces["t_ramp"], t_ramp)]
+            cur = traces[np.isclose(traces["theta"], th) & rows_equal(traces["t_ramp"], t_ramp)
+                         & rows_equal(traces["eta_c"], eta_c)]
             for (mu_a, _seed, _id), g in cur.groupby(["mu_a", "seed", "member_id"]):
                 ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE[outcome[_id]], lw=1.0)
             on = onsets[np.isclose(onsets["theta"], th) & rows_equal(onsets["t_ramp"], t_ramp)
-                        & onsets["during_ramp"].astype(bool)]
+                        & rows_equal(onsets["eta_c"], eta_c) & onsets["during_ramp"].astype(bool)]
             for _, r in on.iterrows():
                 g = cur[cur["member_id"] == r["member_id"]]
                 ax.plot(r["t_onset"], np.interp(r["t_onset"], g["t"], g["v"]), "o", color="k", ms=3, zorder=5)
@@ -185,9 +187,10 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
             ax.set_yscale("symlog", linthresh=1e-5)
             ax.axhline(0.0, color="0.8", lw=0.6)
             ax.set_xlabel("time (s)")
-            release = "" if len(ramps) == 1 else (", weight at once" if pd.isna(t_ramp) or not t_ramp > 2 * window
-                                                  else f", released over {t_ramp:g} s")
-            ax.set_title(rf"$\theta$ = {th:g}{release}", fontsize=9)
+            release = "" if len({r for r, _ in ramps}) == 1 else (
+                ", weight at once" if pd.isna(t_ramp) or not t_ramp > 2 * window else f", released over {t_ramp:g} s")
+            damping = rf", $\eta_c$ = {eta_c:g}/s" if dampings else ""
+            ax.set_title(rf"$\theta$ = {th:g}{release}{damping}", fontsize=9)
         row[0].set_ylabel(f"velocity of the top over {window * 1e3:g} ms (m/s)")
     Line2D = plt.matplotlib.lines.Line2D
     handles = [Line2D([], [], color=colors[w], label=rf"$\mu_a$ = {w:g}") for w in weights]
@@ -205,30 +208,32 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
 
 def plot_branches(branch: pd.DataFrame, onsets: pd.DataFrame, out: str | os.PathLike) -> list[Path]:
     """Figs. 2-3 from slowly loaded runs: mu against the interface's slip velocity (log; ``v_slip``, the
-    elastic loading rate of the contact-free sites taken off) as each run's ramp traced it (:func:`slipchain.analysis.traces.ramp_branch`), one panel per interface and temperature,
+    elastic loading rate of the contact-free sites taken off) as each run's ramp traced it (:func:`slipchain.analysis.traces.ramp_branch`), one panel per interface, temperature and contact damping,
     one line per run coloured by theta; a runaway's branch ends at its onset (a black dot: mu_max); each
     steady run's tester reading (its weight against its steady velocity, ``onsets`` rows with outcome
     steady) as an open circle of its load's colour."""
     plt = pyplot()
-    groups = sorted(branch.groupby(["N", "temperature"], dropna=False).groups)
+    groups = sorted(branch.groupby(["N", "temperature", "eta_c"], dropna=False).groups)
+    dampings = branch["eta_c"].nunique() > 1
     fig, axes = plt.subplots(1, len(groups), figsize=(4.2 * len(groups) + 1.4, 4.2), sharey=True, squeeze=False)
     thetas = sorted(branch["theta"].unique())
     colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0.0, 0.9, max(len(thetas), 2)))))
-    for ax, (n, temp) in zip(axes[0], groups):
-        cur = branch[rows_equal(branch["N"], n) & rows_equal(branch["temperature"], temp)]
+    for ax, (n, temp, eta_c) in zip(axes[0], groups):
+        same_group = rows_equal(branch["N"], n) & rows_equal(branch["temperature"], temp) & rows_equal(branch["eta_c"], eta_c)
+        cur = branch[same_group]
         for (th, _id), g in cur.groupby(["theta", "member_id"]):
             g = g[g["v_slip"] > 0]
             ax.plot(g["v_slip"], g["mu"], color=colors[th], lw=0.8, alpha=0.8)
             on = onsets[(onsets["member_id"] == _id) & onsets["during_ramp"].astype(bool)]
             if len(on) and len(g):
                 ax.plot(g["v_slip"].iloc[-1], g["mu"].iloc[-1], "o", color="k", ms=3, zorder=5)
-        same = onsets[rows_equal(onsets["N"], n) & rows_equal(onsets["temperature"], temp) & (onsets["outcome"] == "steady")
-                      & onsets["velocity"].notna()]
+        same = onsets[rows_equal(onsets["N"], n) & rows_equal(onsets["temperature"], temp) & rows_equal(onsets["eta_c"], eta_c)
+                      & (onsets["outcome"] == "steady") & onsets["velocity"].notna()]
         for _, r in same.iterrows():
             ax.plot(r["velocity"], r["mu_a"], "o", mfc="none", mec=colors.get(r["theta"], "0.3"), ms=6, zorder=6)
         ax.set_xscale("log")
         ax.set_xlabel("slip velocity of the interface (m/s)")
-        label = f"{n:g} x {n:g}" + ("" if pd.isna(temp) else f", {temp:g} °C")
+        label = f"{n:g} x {n:g}" + ("" if pd.isna(temp) else f", {temp:g} °C") + (rf", $\eta_c$ = {eta_c:g}/s" if dampings else "")
         ax.set_title(label, fontsize=9)
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel(r"applied $\mu_a$ (the weight while it rises)")

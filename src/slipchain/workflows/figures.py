@@ -163,18 +163,23 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
                   write_csv(check, Path(out) / "branch_check.csv", float_format="%.6g"),
                   write_csv(at_v, Path(out) / "branch_mu.csv", float_format="%.6g")]
     lines = []
+    several = onsets["eta_c"].nunique() > 1  # name the contact damping where the stores mix several
+
+    def damping(r) -> str:
+        return f", eta_c = {r['eta_c']:g}/s" if several else ""
+
     if len(check):
         r = check["ratio"]
         lines.append(f"the ramp's velocity at a steady run's weight over the steady velocity: median {r.median():.3f}, "
                      f"{r.min():.3f} to {r.max():.3f} ({len(check)} pairs; branch_check.csv)")
     for _, r in brackets.iterrows():
         bad = f"; {r['inconsistent']} seed(s) inconsistent" if r["inconsistent"] else ""
-        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C, ramp {r['t_ramp']:g} s, theta = {r['theta']:g}: mu_max in "
+        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C{damping(r)}, ramp {r['t_ramp']:g} s, theta = {r['theta']:g}: mu_max in "
                      f"[{r['lo']:g}, {r['hi']:g}) ({r['per_seed']}{bad})")
     for _, r in summary.iterrows():
         se = f" ± {r['mu_max_se']:.4f}" if np.isfinite(r["mu_max_se"]) else ""
         rse = f" ± {r['R_se']:.4f}" if np.isfinite(r["R_se"]) else ""
-        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C, weight rising {r['rate']:g}/s, theta = {r['theta']:g}: mu_max "
+        lines.append(f"N = {r['N']:g}, {r['temperature']:g} °C{damping(r)}, weight rising {r['rate']:g}/s, theta = {r['theta']:g}: mu_max "
                      f"{r['mu_max']:.4f}{se} ({int(r['runs'])} run(s); read at 10 v0 10**delta {r['mu_max_10']:.4f}); "
                      f"R = {r['R']:.4f}{rse} ({r['R_10']:.4f})")
     return paths, lines
