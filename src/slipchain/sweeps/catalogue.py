@@ -136,6 +136,8 @@ CATALOGUE: dict[str, Study] = {
                               "docs/tester-3d/index.md", "mu_max at the runaway's onset on 128 x 128, every load (seed 0)"),
     "tester-onset-32-etol": Study("study", 4, "15 core-minutes (160-376 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                   "tester-onset-32-seeds' seed 1 with energy_tol = 1e-3: the onset where the default puts it?"),
+    "tester-16-long-etac": Study("study", 8, "not yet run (tester-16-long's 70-906 s a run expected)", "docs/tester-3d/index.md",
+                                 "tester-16-long's release at once at the paper's largest contact damping, eta_c = omega0"),
     "tester-onset-32-etac": Study("study", 8, "all 8 run (146-645 s a run, 2 438 s on one Zen 5 core beside two sweeps)", "docs/tester-3d/index.md",
                                   "tester-onset-32-etol at the paper's other contact dampings, eta_c = 0.3 omega0 and omega0"),
     "tester-onset-32-short": Study("study", 4, "11 core-minutes (84-305 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
