@@ -187,7 +187,7 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
             ax.set_yscale("symlog", linthresh=1e-5)
             ax.axhline(0.0, color="0.8", lw=0.6)
             ax.set_xlabel("time (s)")
-            release = "" if len({r for r, _ in ramps}) == 1 else (
+            release = "" if pd.Series([r for r, _ in ramps]).nunique(dropna=False) == 1 else (
                 ", weight at once" if pd.isna(t_ramp) or not t_ramp > 2 * window else f", released over {t_ramp:g} s")
             damping = rf", $\eta_c$ = {eta_c:g}/s" if dampings else ""
             ax.set_title(rf"$\theta$ = {th:g}{release}{damping}", fontsize=9)
