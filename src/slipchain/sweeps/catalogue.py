@@ -136,7 +136,7 @@ CATALOGUE: dict[str, Study] = {
                               "docs/tester-3d/index.md", "mu_max at the runaway's onset on 128 x 128, every load (seed 0)"),
     "tester-onset-32-etol": Study("study", 4, "15 core-minutes (160-376 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                   "tester-onset-32-seeds' seed 1 with energy_tol = 1e-3: the onset where the default puts it?"),
-    "tester-16-long-etac": Study("study", 8, "3 of 8 run (theta = 0.05 at 0.85: 1 684 s; 0.5 at 0.6 and 0.7: 181 and 349 s; beside other runs); theta = 0.05 at 0.9 checkpointed", "docs/tester-3d/index.md",
+    "tester-16-long-etac": Study("study", 8, "7 of 8 run (theta = 0.05 at 0.85: 1 684 s; the others 89-349 s; beside other runs); theta = 0.05 at 0.9 checkpointed", "docs/tester-3d/index.md",
                                  "tester-16-long's release at once at the paper's largest contact damping, eta_c = omega0"),
     "tester-16-long-etac-2": Study("study", 1, "run (231 s beside other runs): held, so [0.80, 0.85) at eta_c = omega0", "docs/tester-3d/index.md",
                                    "tester-16-long-etac's theta = 0.05 at 0.8, below the 0.85 that ran away at eta_c = omega0"),
