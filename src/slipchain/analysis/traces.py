@@ -368,6 +368,12 @@ def rows_equal(column: pd.Series, value) -> np.ndarray:
     return np.isnan(col) if value is None or pd.isna(value) else np.isclose(col, float(value))
 
 
+def rows_matching(frame: pd.DataFrame, values: dict) -> np.ndarray:
+    """Rows of ``frame`` equal in every column named in ``values`` to its value (:func:`rows_equal`): the rows
+    of one group (e.g. interface, temperature and contact damping)."""
+    return np.all([rows_equal(frame[k], v) for k, v in values.items()], axis=0)
+
+
 def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
     """The ramp's reading against the tester's: for every steady run (``steady``: rows with N, temperature,
     eta_c, theta, seed, mu_a, velocity, velocity_sem), the velocity at which the slowly loaded runs of the same
@@ -378,7 +384,7 @@ def branch_check(branch: pd.DataFrame, steady: pd.DataFrame) -> pd.DataFrame:
     rows = []
     keys = ["N", "temperature", "eta_c", "theta", "seed"]
     for _, s in steady.iterrows():
-        same = branch[np.all([rows_equal(branch[k], s[k]) for k in keys], axis=0) & (branch["v_slip"] > 0)]
+        same = branch[rows_matching(branch, {k: s[k] for k in keys}) & (branch["v_slip"] > 0)]
         for mid, g in same.groupby("member_id"):
             v_ramp = float(np.exp(_last_passage(g["mu"].to_numpy(), np.log(g["v_slip"].to_numpy()), s["mu_a"])))
             if np.isfinite(v_ramp):
@@ -429,5 +435,5 @@ def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
 
 __all__ = ["BRACKET_KEYS", "BRANCH_COLUMNS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR",
            "OUTCOMES", "branch_check", "branch_scale", "branch_summary", "first_crossing", "is_release", "last_crossing", "loading_rate", "onset_summary",
-           "protocol_brackets", "ramp_branch", "rows_equal", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
+           "protocol_brackets", "ramp_branch", "rows_equal", "rows_matching", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
            "window_velocity"]

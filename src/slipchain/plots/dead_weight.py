@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ..analysis.statistics import ratios_to_first
-from ..analysis.traces import rows_equal
+from ..analysis.traces import rows_matching
 from ..tester.analysis import OK, RUNAWAY, pressure_group
 from .common import pyplot, save_figure
 
@@ -162,6 +162,7 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     plt = pyplot()
     thetas = sorted(traces["theta"].unique())
     ramps = sorted(traces.groupby(["t_ramp", "eta_c"], dropna=False).groups)  # a row per release (and damping)
+    releases = traces["t_ramp"].nunique(dropna=False) > 1
     dampings = traces["eta_c"].nunique() > 1
     fig, axes = plt.subplots(len(ramps), len(thetas), figsize=(4.0 * len(thetas) + 1.6, 0.4 + 3.8 * len(ramps)),
                              sharey=True, squeeze=False)
@@ -171,12 +172,11 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
     outcome = dict(zip(onsets["member_id"], onsets["outcome"]))
     for row, (t_ramp, eta_c) in zip(axes, ramps):
         for ax, th in zip(row, thetas):
-            cur = traces[np.isclose(traces["theta"], th) & rows_equal(traces["t_ramp"], t_ramp)
-                         & rows_equal(traces["eta_c"], eta_c)]
+            panel = {"theta": th, "t_ramp": t_ramp, "eta_c": eta_c}
+            cur = traces[rows_matching(traces, panel)]
             for (mu_a, _seed, _id), g in cur.groupby(["mu_a", "seed", "member_id"]):
                 ax.plot(g["t"], g["v"], color=colors[mu_a], ls=STATUS_STYLE[outcome[_id]], lw=1.0)
-            on = onsets[np.isclose(onsets["theta"], th) & rows_equal(onsets["t_ramp"], t_ramp)
-                        & rows_equal(onsets["eta_c"], eta_c) & onsets["during_ramp"].astype(bool)]
+            on = onsets[rows_matching(onsets, panel) & onsets["during_ramp"].astype(bool)]
             for _, r in on.iterrows():
                 g = cur[cur["member_id"] == r["member_id"]]
                 ax.plot(r["t_onset"], np.interp(r["t_onset"], g["t"], g["v"]), "o", color="k", ms=3, zorder=5)
@@ -187,7 +187,7 @@ def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: flo
             ax.set_yscale("symlog", linthresh=1e-5)
             ax.axhline(0.0, color="0.8", lw=0.6)
             ax.set_xlabel("time (s)")
-            release = "" if pd.Series([r for r, _ in ramps]).nunique(dropna=False) == 1 else (
+            release = "" if not releases else (
                 ", weight at once" if pd.isna(t_ramp) or not t_ramp > 2 * window else f", released over {t_ramp:g} s")
             damping = rf", $\eta_c$ = {eta_c:g}/s" if dampings else ""
             ax.set_title(rf"$\theta$ = {th:g}{release}{damping}", fontsize=9)
@@ -219,16 +219,15 @@ def plot_branches(branch: pd.DataFrame, onsets: pd.DataFrame, out: str | os.Path
     thetas = sorted(branch["theta"].unique())
     colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0.0, 0.9, max(len(thetas), 2)))))
     for ax, (n, temp, eta_c) in zip(axes[0], groups):
-        same_group = rows_equal(branch["N"], n) & rows_equal(branch["temperature"], temp) & rows_equal(branch["eta_c"], eta_c)
-        cur = branch[same_group]
+        group = {"N": n, "temperature": temp, "eta_c": eta_c}
+        cur = branch[rows_matching(branch, group)]
         for (th, _id), g in cur.groupby(["theta", "member_id"]):
             g = g[g["v_slip"] > 0]
             ax.plot(g["v_slip"], g["mu"], color=colors[th], lw=0.8, alpha=0.8)
             on = onsets[(onsets["member_id"] == _id) & onsets["during_ramp"].astype(bool)]
             if len(on) and len(g):
                 ax.plot(g["v_slip"].iloc[-1], g["mu"].iloc[-1], "o", color="k", ms=3, zorder=5)
-        same = onsets[rows_equal(onsets["N"], n) & rows_equal(onsets["temperature"], temp) & rows_equal(onsets["eta_c"], eta_c)
-                      & (onsets["outcome"] == "steady") & onsets["velocity"].notna()]
+        same = onsets[rows_matching(onsets, group) & (onsets["outcome"] == "steady") & onsets["velocity"].notna()]
         for _, r in same.iterrows():
             ax.plot(r["velocity"], r["mu_a"], "o", mfc="none", mec=colors.get(r["theta"], "0.3"), ms=6, zorder=6)
         ax.set_xscale("log")
