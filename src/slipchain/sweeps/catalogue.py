@@ -146,7 +146,7 @@ CATALOGUE: dict[str, Study] = {
                                    "tester-onset-32-etol with the ramp cut short (to 0.98 over 5.6 s, decided from 5.65 s): the same onset, less runaway?"),
     "tester-onset-128-etol": Study("study", 3, "all 3 run (theta = 0.2 from rest 3 704 s; 0.05 and 0.5, restarted to take the savings, 6 049 and 5 624 s; one Zen 5 core each)",
                                    "docs/tester-3d/index.md", "tester-onset-128's lighter loads with energy_tol = 1e-3 and the ramp cut short (seed 0)"),
-    "tester-onset-128-seeds": Study("study", 8, "7 of 8 run: theta = 0.05 (4 829-4 865 s each), 1 (1 420-2 067 s), 0.5 (6 372 and 5 695 s) and 0.2 seed 1 (6 504 s) on one Zen 5 core; theta = 0.2 seed 2 not yet", "docs/tester-3d/index.md",
+    "tester-onset-128-seeds": Study("study", 8, "all 8 run: theta = 0.05 (4 829-4 865 s each), 1 (1 420-2 067 s), 0.5 (6 372 and 5 695 s) and 0.2 (6 504 and 5 981 s) on one Zen 5 core beside other runs", "docs/tester-3d/index.md",
                                     "tester-onset-128-etol for seeds 1 and 2 at every load"),
     "tester-onset-32-11c": Study("study", 4, "27 core-minutes (235-716 s a run; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                                  "mu_max at the runaway's onset on 32 x 32 at Fig. 3's 11 °C, every load (seed 0)"),
