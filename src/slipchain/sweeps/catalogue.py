@@ -124,7 +124,7 @@ CATALOGUE: dict[str, Study] = {
                              "docs/tester-3d/index.md", "tester-32-slower for seeds 1 and 2"),
     "tester-32-slower": Study("study", 8, "all 8 run (154-2 601 s each, 2.0 core-hours; a Zen 5 EPYC)", "docs/tester-3d/index.md",
                               "tester-16-slower's 6-s bracket, 0.95 and 1.05, on a 32 x 32 interface (seed 0)"),
-    "tester-64-long": Study("study", 4, "2 of 4 run (theta = 0.5 at 0.6 held, 0.7 ran away: 1 391 and 5 381 s on one Zen 5 core beside another run); 0.05 at 0.85 (about 5 core-hours) a third done, checkpointed", "docs/tester-3d/index.md",
+    "tester-64-long": Study("study", 4, "2 of 4 run (theta = 0.5 at 0.6 held, 0.7 ran away: 1 391 and 5 381 s on one Zen 5 core beside another run); 0.05 at 0.85 (about 5 core-hours) 1.22 s of 3 done, checkpointed", "docs/tester-3d/index.md",
                             "tester-32-long's release at once on 64 x 64 (seed 0)"),
     "tester-64-slower": Study("study", 8, "5 of 8 run: the steady side, 502-645 s each, and theta = 1 at 1.05, 2 395 s (a Zen 5 EPYC)", "docs/tester-3d/index.md",
                               "tester-32-slower on a 64 x 64 interface (seed 0)"),
