@@ -223,3 +223,73 @@ def test_a_dead_weight_run_keeps_one_contact_record_bit_for_bit_and_resumes_from
     with xr.open_dataset(new) as ds:
         assert ds.sizes["chunk_0"] == 1 and int(ds["rec_chunk_samples_0"].values[0]) == 20
     _same(reference, run(cfg, checkpoint=new))
+
+
+def test_contact_records_past_their_budget_are_merged_and_resume_bit_for_bit(tmp_path, monkeypatch):
+    """A spring-driven run keeps a per-contact record per chunk until the records pass their byte budget
+    (observers.CONTACT_SUMS_BYTES: a 128 x 128 run of 22 s held 227 MB), then merges them pairwise.
+    Here the cap is 3 records, over 24 chunks. f_d, the state and mu_star are the per-chunk run's bit
+    for bit; each record is the sum of its chunks; the steady window's per-contact averages are the
+    per-chunk records' from the first record edge inside MSER's window; a crash and resume gives the
+    same bits; and a checkpoint written before (format 2: a record per chunk, no counts) resumes to them."""
+    import importlib
+
+    from slipchain.engine import observers
+
+    simulate = importlib.import_module("slipchain.engine.simulate")
+    cfg = dict(N=31, theta=0.5, t_total=0.012, seed=2)
+    recordings = []
+    assemble = simulate.assemble_run
+
+    def keep(system, rec, *a, **k):
+        recordings.append(rec)
+        return assemble(system, rec, *a, **k)
+
+    with monkeypatch.context() as m:
+        m.setattr(simulate, "assemble_run", keep)
+        per_chunk = run(cfg)
+        m.setattr(observers, "record_cap", lambda nc, budget=None: 3)
+        merged = run(cfg)
+    fine, coarse = recordings
+    assert len(fine.contact_sums) == 24 and set(fine.chunk_samples) == {int(round(5e-4 / 1e-5))}
+    assert 2 <= len(coarse.contact_sums) <= 3 and coarse.chunk_starts[0] == 0
+    for k in ("f_d", "x_mean", "X_mean", "x", "u", "X", "U"):
+        assert (merged[k].values == per_chunk[k].values).all(), k
+    assert merged.attrs["mu_star"] == per_chunk.attrs["mu_star"] and merged.attrs["t_transient"] == per_chunk.attrs["t_transient"]
+    ends = list(coarse.chunk_starts[1:]) + [sum(fine.chunk_samples)]
+    for s0, s1, cs in zip(coarse.chunk_starts, ends, coarse.contact_sums):
+        parts = [c for t, c in zip(fine.chunk_starts, fine.contact_sums) if s0 <= t < s1]
+        np.testing.assert_allclose(cs, np.sum(parts, axis=0), rtol=1e-12, atol=0)
+    start = int(round(float(per_chunk.attrs["t_transient"]) / 1e-5))
+    edge = min(s for s in coarse.chunk_starts if s >= start)
+    window = [(c, n) for t, n, c in zip(fine.chunk_starts, fine.chunk_samples, fine.contact_sums) if t >= edge]
+    steps = sum(n for _, n in window) * (1e-5 / build_system(make_config(cfg)).config.dt)
+    expected = sum(c for c, _ in window)[:, 0] / round(steps)
+    np.testing.assert_allclose(merged["contact_force_mean"].values, expected, rtol=1e-10)
+
+    path = tmp_path / "merged.nc"
+    with monkeypatch.context() as m:
+        m.setattr(observers, "record_cap", lambda nc, budget=None: 3)
+        _crash_after(m, 9)
+        with pytest.raises(Crash):
+            run(cfg, checkpoint=path, checkpoint_every=0)
+        with xr.open_dataset(path) as ds:
+            assert ds.attrs["checkpoint_format"] == 3 and ds.sizes["chunk_0"] <= 3
+            assert int(ds["rec_chunk_counts_0"].values.sum()) == 9
+    with monkeypatch.context() as m:
+        m.setattr(observers, "record_cap", lambda nc, budget=None: 3)
+        _same(merged, run(cfg, checkpoint=path))
+
+    old = tmp_path / "old.nc"
+    with monkeypatch.context() as m:
+        _crash_after(m, 9)
+        with pytest.raises(Crash):
+            run(cfg, checkpoint=old, checkpoint_every=0)
+    with xr.open_dataset(old) as ds:
+        ds = ds.load().drop_vars("rec_chunk_counts_0")
+    assert ds.sizes["chunk_0"] == 9
+    ds.attrs["checkpoint_format"] = 2
+    ds.to_netcdf(old, engine="h5netcdf")
+    with monkeypatch.context() as m:
+        m.setattr(observers, "record_cap", lambda nc, budget=None: 3)
+        _same(merged, run(cfg, checkpoint=old))

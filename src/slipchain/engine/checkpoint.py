@@ -11,9 +11,10 @@ stopped:
 * each row's control (:class:`~slipchain.engine.control.RowControl`): samples done, limit (a
   limit above the config's says the run was extended by its slip cycles), active/status/message, the automatic length's f_d and <x> series and its last SE (the
   dead-weight ramp is a function of the samples done);
-* the recorder (:class:`~slipchain.engine.observers.Recorder`): every sample so far, the chunk
-  boundaries, the per-contact sums per chunk (one running sum for a dead-weight run) and the work
-  sums;
+* the recorder (:class:`~slipchain.engine.observers.Recorder`): every sample so far, the per-contact
+  sums in records of whole chunks (a record per chunk until they pass CONTACT_SUMS_BYTES, then merged
+  pairwise; one running sum for a dead-weight run) with each record's first sample, samples and chunks,
+  and the work sums;
 * the start values the result needs (<x> and the stored energy at the start), the wall time so far
   and the simulated times of earlier resumes.
 
@@ -45,8 +46,9 @@ from .backends.base import Batch
 from .control import RowControl
 from .observers import Recorder
 
-FORMAT = 2  # bumped whenever the layout below changes; a checkpoint of another format is refused
-READS = (1, 2)  # formats this version reads: 1 lacks the bulk's state and the bulk's work (both zero then)
+FORMAT = 3  # bumped whenever the layout below changes; a checkpoint of another format is refused
+READS = (1, 2, 3)  # formats this version reads: 1 lacks the bulk's state and the bulk's work (both zero then);
+# 1 and 2 lack the chunks per contact record (one record per chunk, or one running record: replayed)
 CHECKPOINT_EVERY = 60.0  # default wall-time seconds between checkpoints (slipchain run --checkpoint-every)
 # The batch's arrays; geometry, shape, the elastic kernel, the adaptive step's folds and control, the
 # preconditioner and the implicit scheme follow from the configs (Batch.pack).
@@ -164,10 +166,9 @@ class Checkpointer:
             if c.decide is not None:  # its history is the recorded trace of <X>
                 c.decide.X_mean = [samples[:, S.O_XUMEAN].copy()]
                 c.decide.reached = bool(ds["conv_reached"].values[r])
-            recorder.contact_sums[r] = [s.copy() for s in ds[f"rec_contact_sums_{r}"].values] if lengths.size else []
-            recorder.chunk_starts[r] = [int(v) for v in ds[f"rec_chunk_starts_{r}"].values]
-            recorder.chunk_samples[r] = [int(v) for v in lengths]
-            recorder.collapse(r)
+            counts = ds[f"rec_chunk_counts_{r}"].values if f"rec_chunk_counts_{r}" in ds else None  # format < 3: per chunk
+            recorder.restore(r, ds[f"rec_chunk_starts_{r}"].values, lengths,
+                             list(ds[f"rec_contact_sums_{r}"].values) if lengths.size else [], counts)
             recorder.n[r] = int(ds["rec_n"].values[r])
         works = ds["rec_works"].values
         recorder.works[...] = 0.0
@@ -207,6 +208,7 @@ def _to_dataset(systems, batch: Batch, controls: list[RowControl], rec: Recorder
                                     np.zeros((0, S.N_OUT)))
         data[f"rec_chunk_samples_{r}"] = (f"chunk_{r}", np.asarray(rec.chunk_samples[r], dtype=np.int64))
         data[f"rec_chunk_starts_{r}"] = (f"chunk_{r}", np.asarray(rec.chunk_starts[r], dtype=np.int64))
+        data[f"rec_chunk_counts_{r}"] = (f"chunk_{r}", np.asarray(rec.chunk_counts[r], dtype=np.int64))
         sums = rec.contact_sums[r]
         nc = rec.n_contacts[r]
         data[f"rec_contact_sums_{r}"] = ((f"chunk_{r}", f"contact_{r}", "cacc"),

@@ -38,7 +38,8 @@ MIN_STEADY_SLIDE = 1e-6  # ...and a steady window in which the drive has moved a
 
 def chunk_time(cfg) -> float:
     """Simulated seconds per compiled chunk: CHUNK_TIME, or LONG_CHUNK_TIME with ``min_cycles`` (runs
-    of tens of seconds: the per-contact sums are kept per chunk, and the checkpoint holds them)."""
+    of tens of seconds: the per-contact sums are kept in records of whole chunks, and the checkpoint
+    holds them; observers.CONTACT_SUMS_BYTES bounds them)."""
     return LONG_CHUNK_TIME if cfg.min_cycles else CHUNK_TIME
 
 
@@ -258,7 +259,7 @@ class RowControl:
 
     def chunk_cap(self, chunk: int) -> int:
         """Samples this row may run in the next chunk: ``chunk``, or the long chunk once extended
-        (slip cycles of seconds: the per-contact sums are kept per chunk)."""
+        (slip cycles of seconds: the per-contact sums are kept in records of whole chunks)."""
         return max(chunk, self.long_chunk) if self.extended else chunk
 
     def after_chunk(self, n: int, out_row: np.ndarray) -> None:

@@ -28,9 +28,30 @@ class Observer(Protocol):
     def close(self) -> None: ...
 
 
+CONTACT_SUMS_BYTES = 32 * 2**20
+"""Per row, the most bytes the per-contact records of a spring-driven run may hold (32 MiB: 64 records on a
+128 x 128 interface, 3 484 for a chain of 301 contacts). Past it, adjacent records are merged pairwise
+(:meth:`Recorder.halve`): the steady window's per-contact averages then start at the first record edge
+inside MSER's window instead of the first chunk edge. f_d, mu_star and the state are unaffected."""
+
+
+def record_cap(n_contacts: int, budget: int | None = None) -> int:
+    """Records a row of ``n_contacts`` contacts may keep within ``budget`` bytes (CONTACT_SUMS_BYTES), at least 2."""
+    budget = CONTACT_SUMS_BYTES if budget is None else budget
+    return max(2, int(budget) // (max(n_contacts, 1) * S.N_CACC * 8))
+
+
 class Recorder:
-    """Collects every row's chunk outputs: per-sample f_d and mean displacements, per-chunk
-    per-contact sums, and the work sums.
+    """Collects every row's chunk outputs: per-sample f_d and mean displacements, per-contact sums
+    in records of whole chunks, and the work sums.
+
+    A spring-driven row keeps a record per chunk (its steady window, chosen by MSER only at the end,
+    averages the records that lie wholly in it) until the records would pass CONTACT_SUMS_BYTES
+    (:func:`record_cap`); then adjacent records are merged pairwise and each record holds twice as many
+    chunks (``width``), so a record is ``width`` chunks long except the last, which fills up before a
+    new one starts. A run of 22 s on a 128 x 128 interface (455 chunks of 50 ms) thus keeps 57 records
+    of 8 chunks (29 MB) instead of 455 (227 MB, and as much in each checkpoint). Every step is a
+    function of the chunk sequence alone, so a resumed run keeps the uninterrupted run's records.
 
     A row in ``whole`` (a dead-weight run: its per-contact averages are over the whole run,
     :func:`~slipchain.results.schema.contacts_over_whole_run`) keeps one per-contact record, the running sum
@@ -38,13 +59,16 @@ class Recorder:
     one per chunk: its force ramp advances one sample per chunk, so a ramp of 20 s in 0.1-ms samples
     would otherwise hold 200 000 records (2 GB for 301 contacts, and as much in each checkpoint)."""
 
-    def __init__(self, n_contacts: list[int], whole: list[bool] | None = None):
+    def __init__(self, n_contacts: list[int], whole: list[bool] | None = None, budget: int | None = None):
         self.n_contacts = n_contacts
         self.whole = list(whole) if whole is not None else [False] * len(n_contacts)
+        self.cap = [record_cap(nc, budget) for nc in n_contacts]
         self.samples: list[list[np.ndarray]] = [[] for _ in n_contacts]
         self.contact_sums: list[list[np.ndarray]] = [[] for _ in n_contacts]
-        self.chunk_starts: list[list[int]] = [[] for _ in n_contacts]
-        self.chunk_samples: list[list[int]] = [[] for _ in n_contacts]  # samples per contact-sum record
+        self.chunk_starts: list[list[int]] = [[] for _ in n_contacts]  # first sample of each record
+        self.chunk_samples: list[list[int]] = [[] for _ in n_contacts]  # samples per record
+        self.chunk_counts: list[list[int]] = [[] for _ in n_contacts]  # chunks per record
+        self.width = [1] * len(n_contacts)  # chunks per full record
         self.works = np.zeros((len(n_contacts), S.N_ACC))
         self.n = [0] * len(n_contacts)
 
@@ -53,26 +77,57 @@ class Recorder:
             nc = self.n_contacts[i]
             ns = out.out.shape[1]
             self.samples[i].append(out.out[i].copy())
-            if self.whole[i] and self.contact_sums[i]:
-                self.contact_sums[i][0] += out.cacc[i, :, :nc].T
-                self.chunk_samples[i][0] += ns
-            else:
-                self.chunk_starts[i].append(self.n[i])
-                self.contact_sums[i].append(out.cacc[i, :, :nc].T.copy())
-                self.chunk_samples[i].append(ns)
+            self.add(i, self.n[i], ns, out.cacc[i, :, :nc].T)
             self.works[i] += out.acc[i]
             self.n[i] += ns
 
-    def collapse(self, row: int) -> None:
-        """A ``whole`` row restored with a record per chunk (a checkpoint written before it kept one):
-        those records summed in their order into one, as :meth:`chunk` would have kept them."""
-        if self.whole[row] and len(self.contact_sums[row]) > 1:
-            total = self.contact_sums[row][0].copy()
-            for cs in self.contact_sums[row][1:]:
-                total += cs
-            self.contact_sums[row] = [total]
-            self.chunk_samples[row] = [int(sum(self.chunk_samples[row]))]
-            self.chunk_starts[row] = [self.chunk_starts[row][0]]
+    def add(self, row: int, start: int, ns: int, sums: np.ndarray) -> None:
+        """One chunk's per-contact sums (starting at sample ``start``, ``ns`` samples) into row ``row``'s records."""
+        records = self.contact_sums[row]
+        if records and (self.whole[row] or self.chunk_counts[row][-1] < self.width[row]):
+            records[-1] += sums
+            self.chunk_samples[row][-1] += ns
+            self.chunk_counts[row][-1] += 1
+        else:
+            self.chunk_starts[row].append(start)
+            records.append(np.array(sums, dtype=float, order="C"))
+            self.chunk_samples[row].append(ns)
+            self.chunk_counts[row].append(1)
+        if len(records) > self.cap[row]:
+            self.halve(row)
+
+    def halve(self, row: int) -> None:
+        """Merge row ``row``'s records pairwise (records 0 + 1, 2 + 3, ...; a trailing odd one kept as it
+        is): full records are then twice as wide."""
+        sums, starts, samples, counts = (self.contact_sums[row], self.chunk_starts[row], self.chunk_samples[row],
+                                         self.chunk_counts[row])
+        keep = range(0, len(sums), 2)
+        self.contact_sums[row] = [sums[k] + sums[k + 1] if k + 1 < len(sums) else sums[k] for k in keep]
+        self.chunk_starts[row] = [starts[k] for k in keep]
+        self.chunk_samples[row] = [samples[k] + (samples[k + 1] if k + 1 < len(sums) else 0) for k in keep]
+        self.chunk_counts[row] = [counts[k] + (counts[k + 1] if k + 1 < len(sums) else 0) for k in keep]
+        self.width[row] *= 2
+
+    def restore(self, row: int, starts, samples, sums, counts=None) -> None:
+        """Row ``row``'s records from a checkpoint. With ``counts`` (chunks per record) they are
+        this recorder's own; without (a checkpoint written before records were merged: one record per
+        chunk), or for a ``whole`` row, they are replayed through :meth:`add` in their order, which gives
+        the records an uninterrupted run would hold (a ``whole`` row's: their running sum)."""
+        self.contact_sums[row], self.chunk_starts[row], self.chunk_samples[row], self.chunk_counts[row] = [], [], [], []
+        self.width[row] = 1
+        if counts is None or self.whole[row]:
+            for s0, ns, cs in zip(starts, samples, sums):
+                self.add(row, int(s0), int(ns), cs)
+            if counts is not None and self.chunk_counts[row]:  # a whole row's one record: its chunks
+                self.chunk_counts[row] = [int(np.sum(counts))]
+            return
+        self.contact_sums[row] = [np.array(s, dtype=float, order="C") for s in sums]
+        self.chunk_starts[row] = [int(v) for v in starts]
+        self.chunk_samples[row] = [int(v) for v in samples]
+        self.chunk_counts[row] = [int(v) for v in counts]
+        self.width[row] = self.chunk_counts[row][0] if self.chunk_counts[row] else 1
+        while len(self.contact_sums[row]) > self.cap[row]:  # written under a larger budget
+            self.halve(row)
 
     def recording(self, row: int) -> Recording:
         """Row ``row``'s recording in the run schema's plain form."""

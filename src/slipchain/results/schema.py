@@ -167,9 +167,12 @@ class Recording:
     """What the engine recorded for one realisation, in plain named arrays.
 
     Per output sample k (ending at (k+1)*interval): ``f_d`` mean driving force per block over the
-    sample, ``x_mean``/``X_mean`` mean layer displacements at its end. Per chunk c (starting at
-    sample ``chunk_starts[c]``, ``chunk_samples[c]`` samples long): ``contact_sums[c]``, an
-    (N_c, 4) array of per-contact sums over its steps (force, velocity, velocity**2, slow steps).
+    sample, ``x_mean``/``X_mean`` mean layer displacements at its end. Per record c of whole
+    chunks (a chunk each, until :data:`slipchain.engine.observers.CONTACT_SUMS_BYTES` merges them
+    pairwise; starting at sample ``chunk_starts[c]``, ``chunk_samples[c]`` samples long):
+    ``contact_sums[c]``, an (N_c, 4) array of per-contact sums over its steps (force, velocity,
+    velocity**2, slow steps). The steady window's per-contact averages add the records that lie
+    wholly in MSER's window.
     ``works``: (W_drive, W_damping, W_contacts, W_visc) [J], W_visc the Maxwell arms' work on the
     blocks (material 'prony'; 0 otherwise).
     """
@@ -218,7 +221,7 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
             message = "physics check failed at the end of the run (t = %.6e s): %s" % (
                 n * interval, "; ".join(c.message for c in failed)) + (f" (and: {message})" if message else "")
 
-    # Per-contact averages over the chunks that lie wholly in the steady window (or the whole run)
+    # Per-contact averages over the records that lie wholly in the steady window (or the whole run)
     contact_start = 0 if contacts_over_whole_run(cfg) else start
     sums = np.zeros((system.n_contacts, 4))
     steady_steps = 0
