@@ -31,6 +31,11 @@ def test_the_estimate_grows_as_the_arrays_do_and_a_batch_counts_every_row():
     # only its output samples grow with its length.
     dw, dw2 = (make_config(N=10_000, theta=1.0, dead_weight=0.8, t_max=t, start="rest") for t in (1.0, 2.0))
     assert estimate_bytes(dw2) - estimate_bytes(dw) == pytest.approx(1.0 / dw.output_interval * 128, rel=0.01)
+    # A spring-driven run's records stop growing at twice their budget (observers.CONTACT_SUMS_BYTES, merged
+    # pairwise past it): 10 000 contacts at 320 kB a record hold at most 2 x 104 records, whatever the length
+    sd, sd2 = (make_config(N=10_000, theta=1.0, t_total=t) for t in (1.0, 2.0))
+    assert estimate_bytes(sd2) - estimate_bytes(sd) == pytest.approx(1.0 / sd.output_interval * 128, rel=0.01)
+    assert estimate_bytes(sd) - estimate_bytes(dw) == pytest.approx(2 * 104 * 10_000 * 32 - 10_000 * 32, rel=0.01)
     one = check_memory([c], available=10 * GiB)
     with pytest.raises(MemoryEstimateError, match="3 realisations run together") as e:
         check_memory([c] * 3, available=int(2.5 * one) + 300 * 2**20)

@@ -11,8 +11,10 @@ The estimate (:func:`estimate_bytes`) counts what grows with the run, per realis
 * ``BYTES_PER_CONTACT`` per contact: sites and v*, the solver's warm start, scratch, the
   per-contact results; plus ``N_CACC * 8`` bytes per contact **per chunk** of ``CHUNK_TIME``
   simulated seconds (the per-chunk contact sums from which the steady window's means are taken:
-  the term that dominates long runs of large N), one such record in all for a dead-weight run, whose
-  averages span the whole run (:func:`slipchain.results.schema.contacts_over_whole_run`);
+  the term that dominates long runs of large N), up to twice the records
+  :data:`~slipchain.engine.observers.CONTACT_SUMS_BYTES` allows (past it they are merged pairwise), one
+  such record in all for a dead-weight run, whose averages span the whole run
+  (:func:`slipchain.results.schema.contacts_over_whole_run`);
 * ``BYTES_PER_SAMPLE`` per output sample of f_d and the mean displacements.
 
 The coefficients were measured with peak RSS (``benchmarks/memory_estimate.py`` prints estimate
@@ -37,6 +39,7 @@ from ..model.geometries import geometry_of
 from ..results.schema import contacts_over_whole_run
 from . import scheme as S
 from .control import CHUNK_TIME, LONG_CHUNK_TIME, chunk_time
+from .observers import CONTACT_SUMS_BYTES, record_cap
 
 BYTES_PER_BLOCK = 128
 BYTES_PER_CONTACT = 176
@@ -71,6 +74,8 @@ def estimate_bytes(cfg: Config, t: float | None = None) -> int:
         chunks += int((t - cfg.t_max) / max(LONG_CHUNK_TIME, cfg.output_interval)) + 1
     if contacts_over_whole_run(cfg):  # one running per-contact sum (the recorder's), whatever the length
         chunks = 1
+    chunks = min(chunks, 2 * record_cap(cfg.n_contacts))  # the records merged pairwise past their budget (at its peak
+    # the merge holds the old records and the new, 1.5 cap)
     samples = int(t / max(cfg.output_interval, cfg.dt)) + 1
     n_c = cfg.n_contacts
     per_block = BYTES_PER_BLOCK + (BYTES_PER_BLOCK_FFT if geometry_of(cfg).spectral else 0)
@@ -127,7 +132,7 @@ def check_memory(configs: Iterable[Config], available: int | None = None) -> int
         f"N = {c.N} (theta = {c.theta:g}: {c.n_contacts} contacts; {length}) needs about {need / GiB:,.1f} GiB of "
         f"memory{rows}, more than the {have / GiB:,.1f} GiB this machine has available. Expected: N small enough "
         f"to fit (each block takes about {BYTES_PER_BLOCK} bytes, each contact {BYTES_PER_CONTACT} bytes plus "
-        f"{S.N_CACC * 8} bytes per {CHUNK_TIME:g} s simulated). Reduce N, theta or the run length, "
+        f"{S.N_CACC * 8} bytes per {CHUNK_TIME:g} s simulated, up to {2 * CONTACT_SUMS_BYTES / GiB:g} GiB). Reduce N, theta or the run length, "
         "or set SLIPCHAIN_MEMORY_CHECK=0 to run anyway.")
 
 def extension_refusal(cfg: Config, t_now: float, t_new: float, available: int | None = None) -> str | None:

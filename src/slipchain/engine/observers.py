@@ -30,7 +30,7 @@ class Observer(Protocol):
 
 CONTACT_SUMS_BYTES = 32 * 2**20
 """Per row, the most bytes the per-contact records of a spring-driven run may hold (32 MiB: 64 records on a
-128 x 128 interface, 3 484 for a chain of 301 contacts). Past it, adjacent records are merged pairwise
+128 x 128 interface, 3 483 for a chain of 301 contacts). Past it, adjacent records are merged pairwise
 (:meth:`Recorder.halve`): the steady window's per-contact averages then start at the first record edge
 inside MSER's window instead of the first chunk edge. f_d, mu_star and the state are unaffected."""
 
