@@ -48,6 +48,14 @@ def _crash_after(monkeypatch, saves: int) -> None:
     monkeypatch.setattr(ckpt.Checkpointer, "save", save)
 
 
+def _crashed_run(m, cfg, path, saves: int) -> None:
+    """Run ``cfg`` checkpointing to ``path`` after every chunk, crashing right after the ``saves``-th write
+    (``m``: a monkeypatch context, undone by the caller)."""
+    _crash_after(m, saves)
+    with pytest.raises(Crash):
+        run(cfg, checkpoint=path, checkpoint_every=0)
+
+
 CASES = {
     "fixed length": dict(N=31, theta=0.5, t_total=2.5e-3, seed=2),
     "automatic length": dict(N=31, theta=0.5, seed=5, sem_target=0.03, t_max=0.02),
@@ -93,9 +101,7 @@ def test_run_crashed_after_a_checkpoint_resumes_bit_for_bit(case, tmp_path, monk
     reference = run(cfg)
     path = tmp_path / "run.ckpt.nc"
     with monkeypatch.context() as m:
-        _crash_after(m, SAVES.get(case, 2))
-        with pytest.raises(Crash):
-            run(cfg, checkpoint=path, checkpoint_every=0)
+        _crashed_run(m, cfg, path, SAVES.get(case, 2))
     assert path.exists()
     resumed = run(cfg, checkpoint=path)  # (writing at the default interval: its final checkpoint, used below)
     _same(reference, resumed)
@@ -208,18 +214,14 @@ def test_a_dead_weight_run_keeps_one_contact_record_bit_for_bit_and_resumes_from
     with monkeypatch.context() as m:
         m.setattr(simulate, "Recorder", PerChunk)
         _same(reference, run(cfg))
-        _crash_after(m, 20)  # within the ramp (30 one-sample chunks)
         old = tmp_path / "old.nc"
-        with pytest.raises(Crash):
-            run(cfg, checkpoint=old, checkpoint_every=0)
+        _crashed_run(m, cfg, old, 20)  # within the ramp (30 one-sample chunks)
     with xr.open_dataset(old) as ds:
         assert ds.sizes["chunk_0"] == 20
     _same(reference, run(cfg, checkpoint=old))
     new = tmp_path / "new.nc"
     with monkeypatch.context() as m:
-        _crash_after(m, 20)
-        with pytest.raises(Crash):
-            run(cfg, checkpoint=new, checkpoint_every=0)
+        _crashed_run(m, cfg, new, 20)
     with xr.open_dataset(new) as ds:
         assert ds.sizes["chunk_0"] == 1 and int(ds["rec_chunk_samples_0"].values[0]) == 20
     _same(reference, run(cfg, checkpoint=new))
@@ -270,9 +272,7 @@ def test_contact_records_past_their_budget_are_merged_and_resume_bit_for_bit(tmp
     path = tmp_path / "merged.nc"
     with monkeypatch.context() as m:
         m.setattr(observers, "record_cap", lambda nc, budget=None: 3)
-        _crash_after(m, 9)
-        with pytest.raises(Crash):
-            run(cfg, checkpoint=path, checkpoint_every=0)
+        _crashed_run(m, cfg, path, 9)
         with xr.open_dataset(path) as ds:
             assert ds.attrs["checkpoint_format"] == 3 and ds.sizes["chunk_0"] <= 3
             assert int(ds["rec_chunk_counts_0"].values.sum()) == 9
@@ -282,9 +282,7 @@ def test_contact_records_past_their_budget_are_merged_and_resume_bit_for_bit(tmp
 
     old = tmp_path / "old.nc"
     with monkeypatch.context() as m:
-        _crash_after(m, 9)
-        with pytest.raises(Crash):
-            run(cfg, checkpoint=old, checkpoint_every=0)
+        _crashed_run(m, cfg, old, 9)
     with xr.open_dataset(old) as ds:
         ds = ds.load().drop_vars("rec_chunk_counts_0")
     assert ds.sizes["chunk_0"] == 9
