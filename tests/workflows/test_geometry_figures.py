@@ -6,6 +6,7 @@ steadily in 0.3 ms and pass the run's physics checks (near v0 a 16-block system 
 whole with a period of milliseconds)."""
 
 import json
+import shutil
 import subprocess
 import sys
 
@@ -69,6 +70,15 @@ def test_fig6_3d_from_a_sweep(tmp_path, slipchain_cli, store_of_runs):
     keys = ["geometry", "theta", "v_d"]
     assert len(saw.merge(table[keys].drop_duplicates(), on=keys)) == len(saw) >= 10
     assert "## The sawtooth per point" in report and saw["swing"].notna().all()
+    assert "Partial" not in report
+    # a store still running (one member's file not there yet): the report says how much of it the figure holds
+    partial = tmp_path / "partial"
+    shutil.copytree(store, partial)
+    sorted((partial / "members").glob("*.nc"))[0].unlink()
+    r = slipchain_cli("figure", "fig6-3d", "--store", partial, "--out", tmp_path / "fig-partial")
+    assert r.returncode == 0, r.stderr
+    assert "**Partial**: 15 of the sweep's 16 members completed" in (tmp_path / "fig-partial" / "report.md").read_text()
+    assert len(pd.read_csv(tmp_path / "fig-partial" / "table.csv")) == 15
     # a store of one geometry (in its base config, as presets/fig6-3d-eps1.toml) is read as that geometry;
     # a store without v_d is refused, nothing written (these two stores' runs made here, without Dask)
     (tmp_path / "t.toml").write_text(SWEEP.split("[[grid]]")[0]

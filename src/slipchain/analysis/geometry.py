@@ -151,10 +151,15 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     finite-size check and the slab-thickness dependence."""
     v_d1, v_d2, main = attrs["v_d1"], attrs["v_d2"], attrs["main"]
     eps = attrs.get("epsilon", 1e-2)
+    sweep = f" ({attrs['sweep']})" if attrs.get("sweep") and eps != 1e-2 else ""  # titles apart (test_docs)
     lines = ["# Fig. 6 in 3-D: mu_star(theta) on a 2-D interface (issue 13)" if eps == 1e-2 else
-             f"# Fig. 6 in 3-D at epsilon = {eps:g}: mu_star(theta) on a 2-D interface", ""]
+             f"# Fig. 6 in 3-D at epsilon = {eps:g}{sweep}: mu_star(theta) on a 2-D interface", ""]
     if command:
         lines += [f"Command: `{command}`" + (f" ({wall})" if wall else ""), ""]
+    done, total = attrs.get("completed", (0, 0))
+    if done < total:
+        lines += [f"**Partial**: {done} of the sweep's {total} members completed; the tables and the figure hold "
+                  "those (rerun the command when the sweep has finished).", ""]
     if "epsilon" in attrs:
         lines += [f"epsilon = {attrs['epsilon']:g}, integrator = '{attrs['integrator']}'.", ""]
     lines += ["Seed means ± SE (seeds and time, `analysis.statistics.seed_average`); mu_star = <f_d>/(epsilon f0 "
