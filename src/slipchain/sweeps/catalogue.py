@@ -126,7 +126,7 @@ CATALOGUE: dict[str, Study] = {
                               "tester-16-slower's 6-s bracket, 0.95 and 1.05, on a 32 x 32 interface (seed 0)"),
     "tester-64-long": Study("study", 4, "3 of 4 run (theta = 0.5 at 0.6 held, 0.7 ran away; theta = 0.05 at 0.85 ran away: 1 391, 5 381 and 15 117 s on one Zen 5 core beside another run); theta = 1 at 0.85 not yet", "docs/tester-3d/index.md",
                             "tester-32-long's release at once on 64 x 64 (seed 0)"),
-    "tester-64-long-2": Study("study", 1, "not yet run (about five core-hours: theta = 0.05 at 0.85 took 15 117 s on one Zen 5 core beside another run)",
+    "tester-64-long-2": Study("study", 1, "1 of 1 run: held at 0.8 (793 s on one Zen 5 core beside another run)",
                               "docs/tester-3d/index.md", "tester-64-long's theta = 0.05 at 0.8, after it ran away at 0.85 (seed 0)"),
     "tester-64-slower": Study("study", 8, "5 of 8 run: the steady side, 502-645 s each, and theta = 1 at 1.05, 2 395 s (a Zen 5 EPYC)", "docs/tester-3d/index.md",
                               "tester-32-slower on a 64 x 64 interface (seed 0)"),
