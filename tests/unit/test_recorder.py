@@ -39,8 +39,8 @@ def test_records_sum_their_chunks_hold_the_cap_and_restore_bit_for_bit(seed, n, 
     _feed(rec, chunks)
     r = rec.recording(0)
     assert len(r.contact_sums) <= cap and sum(rec.chunk_counts[0]) == n
-    assert all(c == rec.width[0] for c in rec.chunk_counts[0][:-1]) and (not n or rec.chunk_counts[0][-1] <= rec.width[0])
-    assert rec.width[0] == 1 or len(r.contact_sums) > cap // 2  # merged only when needed
+    assert all(c == rec.width(0) for c in rec.chunk_counts[0][:-1]) and (not n or rec.chunk_counts[0][-1] <= rec.width(0))
+    assert rec.width(0) == 1 or len(r.contact_sums) > cap // 2  # merged only when needed
     assert r.chunk_starts == list(np.cumsum([0] + r.chunk_samples[:-1]))[: len(r.chunk_starts)]  # tiled in order
     first = 0
     for k, cs in zip(rec.chunk_counts[0], r.contact_sums):

@@ -48,7 +48,7 @@ class Recorder:
     A spring-driven row keeps a record per chunk (its steady window, chosen by MSER only at the end,
     averages the records that lie wholly in it) until the records would pass CONTACT_SUMS_BYTES
     (:func:`record_cap`); then adjacent records are merged pairwise and each record holds twice as many
-    chunks (``width``), so a record is ``width`` chunks long except the last, which fills up before a
+    chunks (:meth:`width`), so a record is ``width`` chunks long except the last, which fills up before a
     new one starts. A run of 22 s on a 128 x 128 interface (455 chunks of 50 ms) thus keeps 57 records
     of 8 chunks (29 MB) instead of 455 (227 MB, and as much in each checkpoint). Every step is a
     function of the chunk sequence alone, so a resumed run keeps the uninterrupted run's records.
@@ -68,7 +68,6 @@ class Recorder:
         self.chunk_starts: list[list[int]] = [[] for _ in n_contacts]  # first sample of each record
         self.chunk_samples: list[list[int]] = [[] for _ in n_contacts]  # samples per record
         self.chunk_counts: list[list[int]] = [[] for _ in n_contacts]  # chunks per record
-        self.width = [1] * len(n_contacts)  # chunks per full record
         self.works = np.zeros((len(n_contacts), S.N_ACC))
         self.n = [0] * len(n_contacts)
 
@@ -81,10 +80,15 @@ class Recorder:
             self.works[i] += out.acc[i]
             self.n[i] += ns
 
+    def width(self, row: int) -> int:
+        """Chunks per full record of row ``row``: the first record's (it is full once a merge has run; 1 before)."""
+        counts = self.chunk_counts[row]
+        return counts[0] if counts else 1
+
     def add(self, row: int, start: int, ns: int, sums: np.ndarray) -> None:
         """One chunk's per-contact sums (starting at sample ``start``, ``ns`` samples) into row ``row``'s records."""
         records = self.contact_sums[row]
-        if records and (self.whole[row] or self.chunk_counts[row][-1] < self.width[row]):
+        if records and (self.whole[row] or self.chunk_counts[row][-1] < self.width(row)):
             records[-1] += sums
             self.chunk_samples[row][-1] += ns
             self.chunk_counts[row][-1] += 1
@@ -99,14 +103,13 @@ class Recorder:
     def halve(self, row: int) -> None:
         """Merge row ``row``'s records pairwise (records 0 + 1, 2 + 3, ...; a trailing odd one kept as it
         is): full records are then twice as wide."""
-        sums, starts, samples, counts = (self.contact_sums[row], self.chunk_starts[row], self.chunk_samples[row],
-                                         self.chunk_counts[row])
-        keep = range(0, len(sums), 2)
-        self.contact_sums[row] = [sums[k] + sums[k + 1] if k + 1 < len(sums) else sums[k] for k in keep]
-        self.chunk_starts[row] = [starts[k] for k in keep]
-        self.chunk_samples[row] = [samples[k] + (samples[k + 1] if k + 1 < len(sums) else 0) for k in keep]
-        self.chunk_counts[row] = [counts[k] + (counts[k + 1] if k + 1 < len(sums) else 0) for k in keep]
-        self.width[row] *= 2
+        def pairs(xs):
+            return [xs[k] + xs[k + 1] if k + 1 < len(xs) else xs[k] for k in range(0, len(xs), 2)]
+
+        self.contact_sums[row] = pairs(self.contact_sums[row])
+        self.chunk_starts[row] = self.chunk_starts[row][::2]
+        self.chunk_samples[row] = pairs(self.chunk_samples[row])
+        self.chunk_counts[row] = pairs(self.chunk_counts[row])
 
     def restore(self, row: int, starts, samples, sums, counts=None) -> None:
         """Row ``row``'s records from a checkpoint. With ``counts`` (chunks per record) they are
@@ -114,7 +117,6 @@ class Recorder:
         chunk), or for a ``whole`` row, they are replayed through :meth:`add` in their order, which gives
         the records an uninterrupted run would hold (a ``whole`` row's: their running sum)."""
         self.contact_sums[row], self.chunk_starts[row], self.chunk_samples[row], self.chunk_counts[row] = [], [], [], []
-        self.width[row] = 1
         if counts is None or self.whole[row]:
             for s0, ns, cs in zip(starts, samples, sums):
                 self.add(row, int(s0), int(ns), cs)
@@ -125,7 +127,6 @@ class Recorder:
         self.chunk_starts[row] = [int(v) for v in starts]
         self.chunk_samples[row] = [int(v) for v in samples]
         self.chunk_counts[row] = [int(v) for v in counts]
-        self.width[row] = self.chunk_counts[row][0] if self.chunk_counts[row] else 1
         while len(self.contact_sums[row]) > self.cap[row]:  # written under a larger budget
             self.halve(row)
 

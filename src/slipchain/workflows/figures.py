@@ -69,7 +69,7 @@ def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "",
         if m.id in done and attrs["main"].get(c.geometry) == (c.N, c.Ly, c.N_L):
             saw.append(dict(geometry=c.geometry, theta=c.theta, v_d=c.v_d, seed=c.seed, **sawtooth(st.read_member(m))))
     attrs["sawtooth"] = sawtooth_table(saw)
-    attrs["sweep"], attrs["completed"] = st.sweep.name, (len(done & {m.id for m in st.sweep.members}), len(st.sweep.members))
+    attrs["sweep"], attrs["completed"] = st.sweep.name, (len(st.sweep.members) - len(st.pending()), len(st.sweep.members))
     paths = plot_fig6_3d(table, drop, attrs, out)
     paths += [write_csv(frame, Path(out) / name, float_format="%.6g")
               for name, frame in (("table.csv", table), ("drops.csv", drop), ("sawtooth.csv", attrs["sawtooth"]))]
