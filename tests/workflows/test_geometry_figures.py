@@ -71,6 +71,10 @@ def test_fig6_3d_from_a_sweep(tmp_path, slipchain_cli, store_of_runs):
     assert len(saw.merge(table[keys].drop_duplicates(), on=keys)) == len(saw) >= 10
     assert "## The sawtooth per point" in report and saw["swing"].notna().all()
     assert "Partial" not in report
+    # the explicit levels follow each geometry's stability bound: the report names the step of every point
+    steps = [line for line in report.splitlines() if line.startswith("| integrator = adaptive from dt = 3e-08 s")]
+    assert "the step differs per point" in report and len(steps) == 2
+    assert all(sum(f"| {g}, " in line or f"; {g}, " in line for line in steps) == 1 for g in set(table["geometry"]))
     # a store still running (one member's file not there yet): the report says how much of it the figure holds
     partial = tmp_path / "partial"
     shutil.copytree(store, partial)

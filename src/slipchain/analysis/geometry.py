@@ -135,6 +135,28 @@ def sawtooth_table(rows: list[dict]) -> pd.DataFrame:
                            else c).reset_index(drop=True)
 
 
+def steppers(configs) -> dict[str, list[tuple[str, float, float]]]:
+    """The step of each run (:func:`.reports.step_text`) and the points (geometry, theta, v_d) it made, in
+    the order of first appearance."""
+    from .reports import step_text
+
+    out: dict[str, list[tuple[str, float, float]]] = {}
+    for c in configs:
+        point = (c.geometry, c.theta, c.v_d)
+        if point not in (pts := out.setdefault(step_text(c), [])):
+            pts.append(point)
+    return out
+
+
+def _points_text(points: list[tuple[str, float, float]]) -> str:
+    groups: dict[tuple[str, float], list[float]] = {}
+    for geo, theta, v_d in points:
+        groups.setdefault((geo, v_d), []).append(theta)
+    return "; ".join(f"{geo}, {v_d:g}: {', '.join(f'{t:g}' for t in sorted(ths))}"
+                     for (geo, v_d), ths in sorted(groups.items(), key=lambda kv: (GEOMETRY_ORDER.index(kv[0][0]),
+                                                                                   -kv[0][1])))
+
+
 def _fmt(mu: float, err: float) -> str:
     return f"{mu:.3f} ± {err:.3f}"
 
@@ -160,7 +182,13 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     if done < total:
         lines += [f"**Partial**: {done} of the sweep's {total} members completed; the tables and the figure hold "
                   "those (rerun the command when the sweep has finished).", ""]
-    if "epsilon" in attrs:
+    steppers = attrs.get("steppers") or {}
+    if len(steppers) > 1:  # a preset that picks each point's stepper (fig6-3d-eps1-128-fast)
+        lines += [f"epsilon = {eps:g}; the step differs per point:", "", "| step | points (geometry, v_d: theta) |",
+                  "|---|---|"]
+        lines += [f"| {text} | {_points_text(points)} |" for text, points in steppers.items()]
+        lines.append("")
+    elif "epsilon" in attrs:
         lines += [f"epsilon = {attrs['epsilon']:g}, integrator = '{attrs['integrator']}'.", ""]
     lines += ["Seed means ± SE (seeds and time, `analysis.statistics.seed_average`); mu_star = <f_d>/(epsilon f0 "
               "theta), theta = N_c/(N Ly).", "", "## mu_star(theta) at the main size of each geometry", ""]
@@ -214,4 +242,4 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
 
 
 __all__ = ["GEOMETRY_ORDER", "WHOLE_SLIP_SHARE", "drops", "fig6_3d_data", "geometry_table", "main_mask", "main_sizes",
-           "report_markdown", "sawtooth", "sawtooth_table"]
+           "report_markdown", "sawtooth", "sawtooth_table", "steppers"]

@@ -36,7 +36,7 @@ def report_markdown(ds: xr.Dataset, claims: list[Claim], conv: list[dict[str, An
         + (f"; wall time of the sweep {wall_time_s / 60:.1f} min with {ds.attrs.get('workers', '?')} local worker "
            f"process(es) ({ds.attrs.get('invocations', 1)} invocation(s) that ran members, from the store's "
            "invocations.jsonl)." if wall_time_s is not None else "."),
-        f"- Base: epsilon = {cfg.epsilon:g}, {_step_text(cfg)}, start = {cfg.start}, automatic run length until "
+        f"- Base: epsilon = {cfg.epsilon:g}, {step_text(cfg)}, start = {cfg.start}, automatic run length until "
         f"SE(mu_star) <= {cfg.sem_target:g} (at most t_max = {cfg.t_max:g} s), slipchain {_versions(ds)}.",
         "- Error bars: seed mean of mu_star, error sqrt(max(var_seeds/n, mean(SE_time^2)/n)).",
         "",
@@ -86,14 +86,17 @@ def run_time_text(ds: xr.Dataset) -> str:
     return gpu if on_gpu.all() else f"{text} ({int((~on_gpu).sum())} members); {gpu}"
 
 
-def _step_text(cfg) -> str:
+def step_text(cfg) -> str:
     """Which step made the results (issue 26: the integrator is part of what a report states)."""
     if cfg.integrator == "adaptive":
         return (f"integrator = adaptive from dt = {cfg.dt:g} s (steps up to {cfg.dt * 2**cfg.step_levels:g} s, "
                 f"step_tol = {cfg.step_tol:g})")
     if cfg.integrator == "implicit":
+        above = "backward Euler" if cfg.implicit_scheme == "backward-euler" else "TR-BDF2"
+        if cfg.geometry != "chain" and cfg.krylov_preconditioner != "jacobi":
+            above += f" preconditioned '{cfg.krylov_preconditioner}'"
         return (f"integrator = implicit from dt = {cfg.dt:g} s (explicit steps up to {cfg.dt * 2**cfg.step_levels:g} s, "
-                f"backward Euler above, step_tol = {cfg.step_tol:g})")
+                f"{above} above, step_tol = {cfg.step_tol:g})")
     return f"integrator = {cfg.integrator}, dt = {cfg.dt:g} s"
 
 
@@ -171,4 +174,4 @@ def epsilon_lines(avg: xr.Dataset) -> list[str]:
             f"{d['theta_max']:g}; ratio {d['ratio']:.3f} ± {d['ratio_err']:.3f}" for d in load_drops(avg, "epsilon")]
 
 
-__all__ = ["epsilon_lines", "mechanism_summary", "report_markdown", "run_time_text"]
+__all__ = ["epsilon_lines", "mechanism_summary", "report_markdown", "run_time_text", "step_text"]

@@ -56,7 +56,7 @@ def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "",
     effect per geometry, size and velocity) and sawtooth.csv (f_d's cycles per point at the main size)
     from a store sweeping theta and v_d (and geometry, or one geometry in its base config:
     presets/fig6-3d-eps1.toml)."""
-    from ..analysis.geometry import fig6_3d_data, report_markdown, sawtooth, sawtooth_table
+    from ..analysis.geometry import fig6_3d_data, report_markdown, sawtooth, sawtooth_table, steppers
     from ..plots.geometry import plot_fig6_3d
     from ..results.io import write_csv, write_text_atomic
 
@@ -69,6 +69,7 @@ def fig6_3d(store: str | os.PathLike, out: str | os.PathLike, command: str = "",
         if m.id in done and attrs["main"].get(c.geometry) == (c.N, c.Ly, c.N_L):
             saw.append(dict(geometry=c.geometry, theta=c.theta, v_d=c.v_d, seed=c.seed, **sawtooth(st.read_member(m))))
     attrs["sawtooth"] = sawtooth_table(saw)
+    attrs["steppers"] = steppers(m.config for m in st.sweep.members if m.id in done)
     attrs["sweep"], attrs["completed"] = st.sweep.name, (len(st.sweep.members) - len(st.pending()), len(st.sweep.members))
     paths = plot_fig6_3d(table, drop, attrs, out)
     paths += [write_csv(frame, Path(out) / name, float_format="%.6g")
