@@ -182,11 +182,11 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
     if done < total:
         lines += [f"**Partial**: {done} of the sweep's {total} members completed; the tables and the figure hold "
                   "those (rerun the command when the sweep has finished).", ""]
-    steppers = attrs.get("steppers") or {}
-    if len(steppers) > 1:  # a preset that picks each point's stepper (fig6-3d-eps1-128-fast)
+    steps = attrs.get("steppers") or {}  # :func:`steppers` of the completed members
+    if len(steps) > 1:  # a preset that picks each point's stepper (fig6-3d-eps1-128-fast)
         lines += [f"epsilon = {eps:g}; the step differs per point:", "", "| step | points (geometry, v_d: theta) |",
                   "|---|---|"]
-        lines += [f"| {text} | {_points_text(points)} |" for text, points in steppers.items()]
+        lines += [f"| {text} | {_points_text(points)} |" for text, points in steps.items()]
         lines.append("")
     elif "epsilon" in attrs:
         lines += [f"epsilon = {attrs['epsilon']:g}, integrator = '{attrs['integrator']}'.", ""]
