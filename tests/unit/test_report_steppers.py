@@ -24,7 +24,18 @@ def test_one_step_for_every_point_keeps_the_one_line():
     assert list(steppers(cfgs)) == [step_text(cfgs[0])]
     assert steppers(cfgs)[step_text(cfgs[0])] == [("slab", 0.5, 1e-3), ("slab", 1.0, 1e-3)]  # seeds collapse
     report = report_markdown(_table(), pd.DataFrame(), _attrs(cfgs))
-    assert "epsilon = 1, integrator = 'implicit'." in report and "the step differs per point" not in report
+    assert f"epsilon = 1, {step_text(cfgs[0])}." in report and "the step differs per point" not in report
+    assert "backward Euler above" in report  # the members' step in full, not only the integrator's name
+
+
+def test_one_step_is_the_members_not_the_base():
+    """A grid that sets every member's integrator: the report names the members' step, not the base's."""
+    cfgs = [make_config(geometry="slab", N=8, Ly=8, epsilon=1.0, integrator="adaptive", theta=th) for th in (0.5, 1.0)]
+    attrs = _attrs(cfgs) | {"integrator": "implicit"}  # the store's base says implicit
+    report = report_markdown(_table(), pd.DataFrame(), attrs)
+    assert f"epsilon = 1, {step_text(cfgs[0])}." in report and "implicit" not in report
+    without = report_markdown(_table(), pd.DataFrame(), attrs | {"steppers": {}})  # no completed member
+    assert "epsilon = 1, integrator = 'implicit'." in without
 
 
 def test_mixed_steps_are_listed_with_their_points():

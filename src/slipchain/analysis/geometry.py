@@ -188,7 +188,9 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
                   "|---|---|"]
         lines += [f"| {text} | {_points_text(points)} |" for text, points in steps.items()]
         lines.append("")
-    elif "epsilon" in attrs:
+    elif steps:  # one step for every point: the members' own (a grid may override the base's integrator)
+        lines += [f"epsilon = {eps:g}, {next(iter(steps))}.", ""]
+    elif "epsilon" in attrs:  # no completed member to read the step from: the base's integrator
         lines += [f"epsilon = {attrs['epsilon']:g}, integrator = '{attrs['integrator']}'.", ""]
     lines += ["Seed means ± SE (seeds and time, `analysis.statistics.seed_average`); mu_star = <f_d>/(epsilon f0 "
               "theta), theta = N_c/(N Ly).", "", "## mu_star(theta) at the main size of each geometry", ""]
