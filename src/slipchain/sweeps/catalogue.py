@@ -46,7 +46,7 @@ CATALOGUE: dict[str, Study] = {
                           "(implicit)"),
     "fig6-3d-eps1-128": Study("study", 48, "over 10 h (est.: theta = 1 ~8x fig6-3d-eps1 per run, theta = 0.05 more)", "docs/fig6-3d-eps1/index.md",
                               "fig6-3d-eps1 on the 128 x 128 interface of issue 27 (run in parts: it resumes)"),
-    "fig6-3d-eps1-128-fast": Study("study", 48, "46 of 48 run (all but chain2d at theta = 0.5, v_d1): 38 139 CPU-s, 49-2 876 s a run; est. 11.6 CPU-hours in all", "docs/fig6-3d-eps1/index.md",
+    "fig6-3d-eps1-128-fast": Study("study", 48, "all 48 run: 42 873 CPU-s (11.9 CPU-hours, 6 hours on 2 cores), 49-2 876 s a run (Zen 5, Xeon and EPYC cores)", "docs/fig6-3d-eps1/index.md",
                                    "fig6-3d-eps1-128 with each point's fastest stepper (TR-BDF2 on the slab, adaptive "
                                    "on chain2d at low load)"),
     "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
