@@ -130,7 +130,7 @@ CATALOGUE: dict[str, Study] = {
                               "docs/tester-3d/index.md", "tester-64-long's theta = 0.05 at 0.8, after it ran away at 0.85 (seed 0)"),
     "tester-64-long-3": Study("study", 1, "1 of 1 run: held at 0.75 (3 020 s on one EPYC core beside another run)", "docs/tester-3d/index.md",
                               "tester-64-long's theta = 1 at 0.75, beside its 0.85 (seed 0)"),
-    "tester-64-long-4": Study("study", 1, "running (2026-12-01)", "docs/tester-3d/index.md",
+    "tester-64-long-4": Study("study", 1, "1 of 1 run: ran away at 0.65 (4 026 s on one EPYC core, partly beside another run)", "docs/tester-3d/index.md",
                               "tester-64-long's theta = 0.5 at 0.65, inside its bracket [0.60, 0.70) (seed 0)"),
     "tester-64-slower": Study("study", 8, "5 of 8 run: the steady side, 502-645 s each, and theta = 1 at 1.05, 2 395 s (a Zen 5 EPYC)", "docs/tester-3d/index.md",
                               "tester-32-slower on a 64 x 64 interface (seed 0)"),
