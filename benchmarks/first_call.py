@@ -1,7 +1,7 @@
 """What a process pays on its first run when numba's cache already holds every composed loop: the helpers that
 the Python drivers call (compiled in each process; none is cached on its own, slipchain.engine.jitcache).
 
-    python benchmarks/first_call.py            # about a minute: fills a fresh cache, then one process per case
+    python benchmarks/first_call.py            # about two minutes here: fills a fresh cache, then a process per case
 
 One process fills a fresh NUMBA_CACHE_DIR with every case's loops; then each case runs in a fresh process on
 that cache: ``import slipchain``, a first 2-ms run, the same run again (its difference from the first is what
