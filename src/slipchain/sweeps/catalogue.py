@@ -132,6 +132,8 @@ CATALOGUE: dict[str, Study] = {
                               "tester-64-long's theta = 1 at 0.75, beside its 0.85 (seed 0)"),
     "tester-64-long-4": Study("study", 1, "1 of 1 run: ran away at 0.65 (4 026 s on one EPYC core, partly beside another run)", "docs/tester-3d/index.md",
                               "tester-64-long's theta = 0.5 at 0.65, inside its bracket [0.60, 0.70) (seed 0)"),
+    "tester-64-long-5": Study("study", 2, "0 of 2 run", "docs/tester-3d/index.md",
+                              "tester-64-long's fourth load, theta = 0.2 at 16 x 16's bracket, 0.7 and 0.75 (seed 0)"),
     "tester-64-long-seeds": Study("study", 4, "2 of 4 run (seed 1: theta = 0.05 held at 0.8, 4 900 s; theta = 0.5 ran away at 0.7, 9 398 s; one core each of a 2-core AMD EPYC without AVX-512)", "docs/tester-3d/index.md",
                                   "tester-64-long for seeds 1 and 2 at seed 0's bounding weights: theta = 0.05 at 0.8, theta = 0.5 at 0.7"),
     "tester-64-slower": Study("study", 8, "5 of 8 run: the steady side, 502-645 s each, and theta = 1 at 1.05, 2 395 s (a Zen 5 EPYC)", "docs/tester-3d/index.md",
