@@ -211,3 +211,35 @@ def test_cli_traces_draws_and_tables_a_store(tmp_path, slipchain_cli, store_of_r
                       (["--store", str(tmp_path / "s"), "--window", "0"], "--window")):
         b = slipchain_cli("figure", "traces", *bad, "--out", str(tmp_path / "o2"))
         assert b.returncode == 2 and says in b.stderr and not (tmp_path / "o2").exists(), b.stderr
+
+
+def test_redecide_replays_the_automatic_length_as_a_run_with_that_t_decide(tmp_path, slipchain_cli, store_of_runs):
+    """analysis.traces.redecide: a stored record fed again to the automatic length (engine.control.UntilDecided)
+    stops where the run stopped at its own t_decide, with its status; at an earlier t_decide it stops where, and
+    says what, a run with that t_decide does (the same physics: the earlier run's record is a prefix of the later's);
+    the CLI writes redecide.csv, and refuses a t_decide that is not positive, writing nothing."""
+    from slipchain.analysis.traces import redecide
+
+    f_max, _ = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
+    base = {**IDENTICAL, "t_ramp": 1e-4, "t_decide": 2e-3, "t_max": 4e-3, "output_interval": 2.5e-6, "dead_weight": 1.0}
+    sweep = make_sweep({"name": "release", "base": base, "grid": {"dead_weight": [0.9 * f_max, 1.2 * f_max]}})
+    store_of_runs(tmp_path / "s", sweep)
+    own, skipped = redecide([tmp_path / "s"], 2e-3)
+    assert skipped == 0 and len(own) == 2
+    assert (own["status_replay"] == own["status"]).all() and (own["t_stop"] == own["t_end"]).all() and own["agree"].all()
+    early, _ = redecide([tmp_path / "s"], 1e-3)
+    for m in sweep.members:
+        ds = run(m.config.model_copy(update={"t_decide": 1e-3}))
+        row = early[early["member_id"] == m.id].iloc[0]
+        assert row["status_replay"] == ds.attrs["velocity_status"]
+        assert row["t_stop"] == pytest.approx(float(ds["time"].values[-1]), abs=1e-9)
+    runaway = early[early["outcome"] == "runaway"]
+    assert len(runaway) == 1 and runaway["t_stop"].iloc[0] < runaway["t_end"].iloc[0]  # stopped earlier, still a runaway
+    r = slipchain_cli("figure", "traces", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o"), "--window", "1e-4",
+                      "--redecide", "1e-3", "--redecide", "2e-3")
+    assert r.returncode == 0, r.stderr
+    table = pd.read_csv(tmp_path / "o" / "redecide.csv")
+    assert sorted(set(table["t_decide_replay"])) == [1e-3, 2e-3] and table["agree"].all()
+    assert "t_decide = 0.001 s replayed on 2 runs: 2 on the same side of mu_max" in r.stdout.replace("\n", " ")
+    b = slipchain_cli("figure", "traces", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o2"), "--redecide", "0")
+    assert b.returncode == 2 and "--redecide" in b.stderr and not (tmp_path / "o2").exists(), b.stderr

@@ -262,6 +262,65 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
     return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets), branch
 
 
+SIDES = {"steady": "below", "held": "below", "runaway": "above", "undecided": "undecided"}  # a run's side of mu_max
+
+
+def redecide(stores: list[str | os.PathLike], t_decide: float) -> tuple[pd.DataFrame, int]:
+    """Every completed run of dead-weight stores that had the automatic length (config ``t_decide``),
+    replayed as if its ``t_decide`` had been ``t_decide``: its stored record <X>(t) fed in the run's compiled
+    chunks (:func:`~slipchain.engine.control.chunk_samples`, a sample at a time while the weight rises) to the
+    automatic length the run used
+    (:class:`slipchain.engine.control.UntilDecided`), up to where that would have stopped it, and classified
+    there as a run classifies its record (:func:`~slipchain.results.schema.dead_weight_status`,
+    :func:`run_outcome`). The physics is the stored run's: its force ramp is kept (``t_ramp`` set to the
+    ramp it had), so only where the run stops and what it is called can change. A replay still undecided at
+    the record's end is the record's own classification there. Returns one row per run (the identifying
+    columns of :func:`velocity_traces`; the stored ``status``, ``outcome`` and record length ``t_end``; the
+    replay's ``t_stop``, ``status_replay``, ``outcome_replay``; ``agree``: both on the same side of mu_max,
+    :data:`SIDES`), and how many runs were skipped because their ramp does not end before ``t_decide``
+    (a slowly loaded run: nothing to replay). Where every run of a protocol agrees, its sweeps with
+    ``t_decide`` would have bracketed mu_max alike and stopped the runaways earlier.
+    ValueError for a ``t_decide`` that is not a positive number of seconds."""
+    from ..engine.control import DeadWeightRamp, UntilDecided, chunk_samples
+    from ..engine.scheme import O_XUMEAN
+    from ..model.system import dead_weight_ramp_time
+    from ..results.schema import dead_weight_status
+
+    if not (isinstance(t_decide, (int, float)) and np.isfinite(t_decide) and t_decide > 0):
+        raise ValueError(f"t_decide has value {t_decide!r}; expected a positive number of seconds (e.g. 0.8)")
+    rows, skipped = [], 0
+    for store, mid, cfg, ds in _runs(stores):
+        if cfg.t_decide is None:
+            continue
+        ramp = dead_weight_ramp_time(cfg)
+        if not ramp < t_decide:
+            skipped += 1
+            continue
+        time, x = ds["time"].values, ds["X_mean"].values
+        c = cfg.model_copy(update={"t_decide": float(t_decide), "t_ramp": ramp})
+        interval = c.output_interval
+        decide = UntilDecided(c, interval, max(1, int(round(t_decide / interval))))
+        ramp_ = DeadWeightRamp(0.0, max(1, int(round(ramp / interval))))
+        chunk, n = chunk_samples(c, interval), 0
+        while n < time.size:  # the chunks the run's driver gave it (engine.driver.drive: a sample at a time while
+            k = min(chunk, time.size - n, ramp_.max_samples(n))  # the weight rises), each checked at its end
+            out_row = np.zeros((k, O_XUMEAN + 1))
+            out_row[:, O_XUMEAN] = x[n:n + k]
+            n += k
+            if decide.decided(n, out_row):
+                break
+        status = ds.attrs.get("velocity_status", "")
+        out, _ = run_outcome(cfg, status, time, x)
+        status_r, _, _ = dead_weight_status(c, time[:n], x[:n])
+        out_r, _ = run_outcome(c, status_r, time[:n], x[:n])
+        rows.append({"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c,
+                     "theta": cfg.theta, "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": ramp, "t_decide": cfg.t_decide,
+                     "status": status, "outcome": out, "t_end": float(time[-1]), "t_decide_replay": float(t_decide),
+                     "t_stop": float(time[n - 1]), "status_replay": status_r, "outcome_replay": out_r,
+                     "agree": SIDES[out] == SIDES[out_r]})
+    return pd.DataFrame(rows), skipped
+
+
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:
     """mu_max per group of runs (:data:`KEYS`: interface, temperature, contact damping, loading rate, load) from the onsets
     read during the ramp: the mean over runs (seeds; a seed with several weights counts once, its mean), its

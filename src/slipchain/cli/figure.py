@@ -178,12 +178,16 @@ def traces(
     store: Annotated[list[Path], typer.Option("--store", help="Store of a sweep of dead-weight runs (e.g. presets/tester-16-long.toml); repeat it to read several.")],
     out_dir: OutOpt,
     window: Annotated[float, typer.Option("--window", help="Seconds over which each drawn velocity is the mean (the distance travelled over the window's length).")] = 0.02,
+    redecide: Annotated[list[float], typer.Option("--redecide", help="Replay each run's automatic length as if its t_decide had been this many seconds (repeat it for several) and say whether each run's outcome stays on its side of mu_max (redecide.csv).")] = [],  # noqa: B006
 ) -> None:
-    """The top's velocity against time per run, one panel per theta; mu_max from where slowly loaded runs run away, and each protocol's bracket from its steady, held and runaway weights; traces.csv, onsets.csv, mu_max.csv, brackets.csv."""
+    """The top's velocity against time per run, one panel per theta; mu_max from where slowly loaded runs run away, and each protocol's bracket from its steady, held and runaway weights; traces.csv, onsets.csv, mu_max.csv, brackets.csv (with --redecide, redecide.csv)."""
     if not window > 0:
         fail(f"--window {window!r}: expected a positive number of seconds (e.g. 0.02)")
+    bad = [t for t in redecide if not t > 0]
+    if bad:
+        fail(f"--redecide {bad[0]!r}: expected a positive number of seconds (e.g. 0.8)")
     try:
-        paths, lines = _figures().traces(store, out_dir, window)
+        paths, lines = _figures().traces(store, out_dir, window, redecide)
     except SweepError as e:
         fail(str(e))
     wrote(paths)

@@ -17,6 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..model.config import Config
 from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import count_cycles, steady_estimate, window_velocity
@@ -161,9 +162,11 @@ class UntilDecided:
     than RUNAWAY_FACTOR*v0*10**delta: sliding steadily there, or still accelerating beyond it,
     :func:`~slipchain.results.schema.accelerating_beyond_branch`). While the slider still accelerates
     or slows down it goes on, at most ``t_max``; there a tester's ``ok`` that still drifts becomes ``no-steady``, with the
-    drift in its reason, and an accelerating slider stays ``runaway``."""
+    drift in its reason, and an accelerating slider stays ``runaway``. It reads only the run's config and
+    its record, so a stored record can be fed to it again with another ``t_decide``
+    (:func:`slipchain.analysis.traces.redecide`)."""
 
-    system: System
+    config: Config
     interval: float
     n_first: int  # samples before the first decision (t_decide)
     X_mean: list[np.ndarray] = field(default_factory=list)
@@ -176,7 +179,7 @@ class UntilDecided:
         (a sample at a time while the weight rises)."""
         self.X_mean.append(out_row[:, S.O_XUMEAN])
         if n_done < self.n_first:
-            if self.system.config.stop_at_runaway and self._runaway(n_done):
+            if self.config.stop_at_runaway and self._runaway(n_done):
                 self.reached = True
                 return True
             return False
@@ -184,9 +187,9 @@ class UntilDecided:
             return False
         time = (np.arange(n_done) + 1) * self.interval
         X = np.concatenate(self.X_mean)
-        after = after_ramp(self.system.config, time)
-        status, _, fit = dead_weight_velocity(self.system, time[after], X[after])
-        self.reached = velocity_decided(status, fit) or accelerating_beyond_branch(self.system, time[after], X[after],
+        after = after_ramp(self.config, time)
+        status, _, fit = dead_weight_velocity(self.config, time[after], X[after])
+        self.reached = velocity_decided(status, fit) or accelerating_beyond_branch(self.config, time[after], X[after],
                                                                                   fit)
         return self.reached
 
@@ -201,7 +204,7 @@ class UntilDecided:
                 break
         X = np.concatenate(parts[::-1])
         time = (np.arange(n_done - X.size, n_done) + 1) * self.interval
-        return certain_runaway(self.system.config, time, X) is not None
+        return certain_runaway(self.config, time, X) is not None
 
     def _check_index(self, n: int) -> int:
         """Checks fall at n_first*(1 + DECIDE_EVERY)**k: a chunk end checks when it passes the next one."""
@@ -347,7 +350,7 @@ def row_control(system: System, x0_mean: float, interval: float,
         limit=limit, base_limit=limit, long_chunk=long_chunk, memory_refusal=memory_refusal,
         converge=UntilConverged(system, x0_mean, interval) if auto else None,
         ramp=DeadWeightRamp(dead_weight_force(system), n_ramp) if dead_weight else None,
-        decide=UntilDecided(system, interval, max(1, int(round(c.t_decide / interval)))) if decide else None,
+        decide=UntilDecided(c, interval, max(1, int(round(c.t_decide / interval)))) if decide else None,
     )
 
 

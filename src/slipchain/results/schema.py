@@ -281,13 +281,7 @@ def assemble_run(system: System, rec: Recording, final: State, *, x0_mean: float
     if prony:
         attrs["W_bulk"] = w_bulk
     if cfg.dead_weight is not None:
-        after = after_ramp(cfg, time)
-        attrs.update(dead_weight_attrs(system, time[after], rec.X_mean[after]))
-        stopped = (certain_runaway(cfg, time, rec.X_mean) if cfg.stop_at_runaway and time.size
-                   and time[-1] < cfg.t_decide - 0.5 * cfg.output_interval else None)
-        if stopped is not None:  # the run stopped before t_decide at a certain runaway (control.UntilDecided)
-            attrs.update(velocity=np.nan, velocity_sem=np.nan, velocity_status=str(VelocityStatus.RUNAWAY),
-                         velocity_reason=stopped)
+        attrs.update(dead_weight_attrs(system, time, rec.X_mean))
     for c in checks:
         attrs[f"check_{c.name}"] = c.value
         attrs[f"check_{c.name}_passed"] = int(c.passed)
@@ -315,12 +309,12 @@ def _beyond_branch(cfg) -> float:
     return RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta
 
 
-def dead_weight_velocity(system: System, time: np.ndarray, X_mean: np.ndarray) -> tuple[str, str, VelocityFit | None]:
+def dead_weight_velocity(cfg, time: np.ndarray, X_mean: np.ndarray) -> tuple[str, str, VelocityFit | None]:
     """The tester's classification of the slider's trace <X>(t) after the ramp (status, reason,
     fit; :func:`dead_weight_attrs`); with the automatic length (``t_decide``) a window is steady
     if its velocity changes by at most DECIDE_DRIFT (instead of the tester's REL_TOL). A status
-    ``runaway`` with a fit of status ``ok`` is a slider that slides steadily beyond the rising branch."""
-    cfg = system.config
+    ``runaway`` with a fit of status ``ok`` is a slider that slides steadily beyond the rising branch.
+    ``cfg``: the run's config."""
     rel_tol = REL_TOL if cfg.t_decide is None else DECIDE_DRIFT
     fit = steady_velocity(time, X_mean, rel_tol) if time.size >= 20 else None
     status, reason = (fit.status, fit.reason) if fit else (VelocityStatus.NO_STEADY, "fewer than 20 samples after the ramp")
@@ -378,7 +372,7 @@ def velocity_decided(status: str, fit: VelocityFit | None) -> bool:
     return status == VelocityStatus.RUNAWAY and fit.status == VelocityStatus.OK
 
 
-def accelerating_beyond_branch(system: System, time: np.ndarray, X_mean: np.ndarray, fit: VelocityFit | None) -> bool:
+def accelerating_beyond_branch(cfg, time: np.ndarray, X_mean: np.ndarray, fit: VelocityFit | None) -> bool:
     """The dead-weight automatic length's early runaway: the tester's fit says the slider still
     accelerates (``runaway`` without a steady window) and its mean velocity over the last tenth of the
     trace after the ramp is already beyond the rising branch (faster than RUNAWAY_FACTOR*v0*10**delta).
@@ -388,7 +382,6 @@ def accelerating_beyond_branch(system: System, time: np.ndarray, X_mean: np.ndar
     so the run stops here (on the tester's block a runaway's fast sliding cost most of a run)."""
     if fit is None or fit.status != VelocityStatus.RUNAWAY or time.size < 20:
         return False
-    cfg = system.config
     last = time >= time[0] + 0.9 * (time[-1] - time[0])
     if last.sum() < 2:
         return False
@@ -396,10 +389,31 @@ def accelerating_beyond_branch(system: System, time: np.ndarray, X_mean: np.ndar
     return bool((xl[-1] - xl[0]) / (tl[-1] - tl[0]) > _beyond_branch(cfg))
 
 
+def dead_weight_status(cfg, time: np.ndarray, X_mean: np.ndarray) -> tuple[str, str, VelocityFit | None]:
+    """The velocity status, its reason and the tester's fit that a dead-weight run records for its
+    whole record <X>(t) (``time`` and ``X_mean`` from the first sample on; the classification reads the
+    samples after the force ramp, :func:`after_ramp`): :func:`dead_weight_velocity`; with the automatic
+    length (``t_decide``) an ``ok`` that still drifts by more than DECIDE_DRIFT is ``no-steady``, and a
+    run that stopped before ``t_decide`` at a certain runaway (config ``stop_at_runaway``,
+    :func:`certain_runaway`) is ``runaway``. The run's attrs (:func:`dead_weight_attrs`) and the replay of
+    the automatic length on a stored record (:func:`slipchain.analysis.traces.redecide`) both read it."""
+    after = after_ramp(cfg, time)
+    status, reason, fit = dead_weight_velocity(cfg, time[after], X_mean[after])
+    if cfg.t_decide is not None and status == VelocityStatus.OK and not velocity_decided(status, fit):
+        status = str(VelocityStatus.NO_STEADY)
+        reason = (f"no steady sliding by t_max = {cfg.t_max:g} s: the velocity still changes by {fit.change:+.1%} "
+                  f"across the best window (automatic length: at most {DECIDE_DRIFT:.0%}); {fit.reason}")
+    stopped = (certain_runaway(cfg, time, X_mean) if cfg.stop_at_runaway and time.size
+               and time[-1] < cfg.t_decide - 0.5 * cfg.output_interval else None)
+    if stopped is not None:  # the run stopped before t_decide at a certain runaway (control.UntilDecided)
+        status, reason, fit = str(VelocityStatus.RUNAWAY), stopped, None
+    return status, reason, fit
+
+
 def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> dict[str, Any]:
     """Dead-weight drive: the applied mu_star, and the velocity measured from the slider's position
-    trace <X>(t) after the force ramp, exactly as the friction tester measures it
-    (:func:`slipchain.results.velocity.steady_velocity`).
+    trace <X>(t) after the force ramp (``time``, ``X_mean``: the whole record), exactly as the friction
+    tester measures it (:func:`slipchain.results.velocity.steady_velocity`; :func:`dead_weight_status`).
 
     ``runaway``: still accelerating at the end, or sliding faster than RUNAWAY_FACTOR*v0*10**delta:
     above the maximum of mu(v) the model slider does not stop accelerating until the contact
@@ -410,11 +424,7 @@ def dead_weight_attrs(system: System, time: np.ndarray, X_mean: np.ndarray) -> d
     (:func:`velocity_decided`) while the tester would call it ``ok`` is ``no-steady``: its velocity
     still drifted by more than DECIDE_DRIFT across the window (the reason says by how much)."""
     cfg = system.config
-    status, reason, fit = dead_weight_velocity(system, time, X_mean)
-    if cfg.t_decide is not None and status == VelocityStatus.OK and not velocity_decided(status, fit):
-        status = str(VelocityStatus.NO_STEADY)
-        reason = (f"no steady sliding by t_max = {cfg.t_max:g} s: the velocity still changes by {fit.change:+.1%} "
-                  f"across the best window (automatic length: at most {DECIDE_DRIFT:.0%}); {fit.reason}")
+    status, reason, fit = dead_weight_status(cfg, time, X_mean)
     ok = status == VelocityStatus.OK
     return {
         "drive": "dead-weight",

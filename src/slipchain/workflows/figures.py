@@ -134,7 +134,8 @@ def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
     return plot_dead_weight(sweep_dataset(store, {"dead_weight"}, "the dead-weight figure"), out)
 
 
-def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: float) -> tuple[list[Path], list[str]]:
+def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: float,
+           redecide: list[float] | tuple[float, ...] = ()) -> tuple[list[Path], list[str]]:
     """The top's velocity against time of every run of dead-weight stores, over windows of ``window`` s,
     with each run's outcome and each runaway's onset (:mod:`slipchain.analysis.traces`): the figure,
     traces.csv (one row per window), onsets.csv (one row per run), mu_max.csv
@@ -143,9 +144,11 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
     where some runs were loaded slowly (not at once or in a release:
     :func:`~slipchain.analysis.traces.is_release`) the rising branch their ramps traced (branch.csv, the branches figure) checked
     against the steady runs (branch_check.csv) and read at fixed velocities (branch_mu.csv:
-    :func:`~slipchain.analysis.traces.branch_summary`); returns the paths, a line on that check, one line per group
-    of mu_max.csv and one per bracket."""
+    :func:`~slipchain.analysis.traces.branch_summary`); with ``redecide`` (seconds), each run's automatic length
+    replayed at each of those t_decide (:func:`~slipchain.analysis.traces.redecide`: redecide.csv); returns the
+    paths, a line on that check, one line per group of mu_max.csv, one per bracket and one per replayed t_decide."""
     from ..analysis.traces import branch_check, branch_summary, onset_summary, protocol_brackets, velocity_traces
+    from ..analysis.traces import redecide as replay
     from ..plots.dead_weight import plot_branches, plot_velocity_traces
 
     frame, onsets, branch = velocity_traces(stores, window)
@@ -164,7 +167,24 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
         paths += [write_csv(branch, Path(out) / "branch.csv", float_format="%.6g"),
                   write_csv(check, Path(out) / "branch_check.csv", float_format="%.6g"),
                   write_csv(at_v, Path(out) / "branch_mu.csv", float_format="%.6g")]
+    replays = []
+    for t_decide in redecide:
+        table, skipped = replay(stores, t_decide)
+        replays.append((t_decide, table, skipped))
+    if replays:
+        paths.append(write_csv(pd.concat([t for _, t, _ in replays], ignore_index=True), Path(out) / "redecide.csv",
+                               float_format="%.6g"))
     lines = []
+    for t_decide, table, skipped in replays:
+        if not len(table):
+            lines.append(f"t_decide = {t_decide:g} s: no run to replay ({skipped} skipped: their ramps do not end before it)")
+            continue
+        run = table[table["outcome"] == "runaway"]
+        stops = (f"; the runaways stop at {run['t_stop'].median():.3g} s (median) instead of {run['t_end'].median():.3g} s"
+                 if len(run) else "")
+        lines.append(f"t_decide = {t_decide:g} s replayed on {len(table)} runs: {int(table['agree'].sum())} on the same "
+                     f"side of mu_max{stops}" + (f" ({skipped} skipped: their ramps do not end before it)" if skipped else "")
+                     + " (redecide.csv)")
     several = onsets["eta_c"].nunique() > 1  # name the contact damping where the stores mix several
 
     def damping(r) -> str:
