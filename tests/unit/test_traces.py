@@ -224,10 +224,10 @@ def test_redecide_replays_the_automatic_length_as_a_run_with_that_t_decide(tmp_p
     base = {**IDENTICAL, "t_ramp": 1e-4, "t_decide": 2e-3, "t_max": 4e-3, "output_interval": 2.5e-6, "dead_weight": 1.0}
     sweep = make_sweep({"name": "release", "base": base, "grid": {"dead_weight": [0.9 * f_max, 1.2 * f_max]}})
     store_of_runs(tmp_path / "s", sweep)
-    own, skipped = redecide([tmp_path / "s"], 2e-3)
-    assert skipped == 0 and len(own) == 2
+    own, skipped = redecide([tmp_path / "s"], [2e-3])
+    assert skipped == {2e-3: 0} and len(own) == 2
     assert (own["status_replay"] == own["status"]).all() and (own["t_stop"] == own["t_end"]).all() and own["agree"].all()
-    early, _ = redecide([tmp_path / "s"], 1e-3)
+    early, _ = redecide([tmp_path / "s"], [1e-3])
     for m in sweep.members:
         ds = run(m.config.model_copy(update={"t_decide": 1e-3}))
         row = early[early["member_id"] == m.id].iloc[0]

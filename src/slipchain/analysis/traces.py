@@ -265,9 +265,9 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
 SIDES = {"steady": "below", "held": "below", "runaway": "above", "undecided": "undecided"}  # a run's side of mu_max
 
 
-def redecide(stores: list[str | os.PathLike], t_decide: float) -> tuple[pd.DataFrame, int]:
+def redecide(stores: list[str | os.PathLike], t_decides: list[float] | tuple[float, ...]) -> tuple[pd.DataFrame, dict[float, int]]:
     """Every completed run of dead-weight stores that had the automatic length (config ``t_decide``),
-    replayed as if its ``t_decide`` had been ``t_decide``: its stored record <X>(t) fed in the run's compiled
+    replayed as if its ``t_decide`` had been each of ``t_decides`` (the stores read once): its stored record <X>(t) fed in the run's compiled
     chunks (:func:`~slipchain.engine.control.chunk_samples`, a sample at a time while the weight rises) to the
     automatic length the run used
     (:class:`slipchain.engine.control.UntilDecided`), up to where that would have stopped it, and classified
@@ -277,48 +277,56 @@ def redecide(stores: list[str | os.PathLike], t_decide: float) -> tuple[pd.DataF
     the record's end is the record's own classification there. Returns one row per run (the identifying
     columns of :func:`velocity_traces`; the stored ``status``, ``outcome`` and record length ``t_end``; the
     replay's ``t_stop``, ``status_replay``, ``outcome_replay``; ``agree``: both on the same side of mu_max,
-    :data:`SIDES`), and how many runs were skipped because their ramp does not end before ``t_decide``
-    (a slowly loaded run: nothing to replay). Where every run of a protocol agrees, its sweeps with
+    :data:`SIDES`; ``t_decide_replay``), and per replayed t_decide how many runs were skipped because their ramp
+    does not end before it (a slowly loaded run: nothing to replay). Where every run of a protocol agrees, its sweeps with
     ``t_decide`` would have bracketed mu_max alike and stopped the runaways earlier.
     ValueError for a ``t_decide`` that is not a positive number of seconds."""
-    from ..engine.control import DeadWeightRamp, UntilDecided, chunk_samples
-    from ..engine.scheme import O_XUMEAN
     from ..model.system import dead_weight_ramp_time
-    from ..results.schema import dead_weight_status
 
-    if not (isinstance(t_decide, (int, float)) and np.isfinite(t_decide) and t_decide > 0):
-        raise ValueError(f"t_decide has value {t_decide!r}; expected a positive number of seconds (e.g. 0.8)")
-    rows, skipped = [], 0
+    for t_decide in t_decides:
+        if not (isinstance(t_decide, (int, float)) and np.isfinite(t_decide) and t_decide > 0):
+            raise ValueError(f"t_decide has value {t_decide!r}; expected a positive number of seconds (e.g. 0.8)")
+    rows, skipped = [], {float(t): 0 for t in t_decides}
     for store, mid, cfg, ds in _runs(stores):
         if cfg.t_decide is None:
             continue
         ramp = dead_weight_ramp_time(cfg)
-        if not ramp < t_decide:
-            skipped += 1
-            continue
         time, x = ds["time"].values, ds["X_mean"].values
-        c = cfg.model_copy(update={"t_decide": float(t_decide), "t_ramp": ramp})
-        interval = c.output_interval
-        decide = UntilDecided(c, interval, max(1, int(round(t_decide / interval))))
-        ramp_ = DeadWeightRamp(0.0, max(1, int(round(ramp / interval))))
-        chunk, n = chunk_samples(c, interval), 0
-        while n < time.size:  # the chunks the run's driver gave it (engine.driver.drive: a sample at a time while
-            k = min(chunk, time.size - n, ramp_.max_samples(n))  # the weight rises), each checked at its end
-            out_row = np.zeros((k, O_XUMEAN + 1))
-            out_row[:, O_XUMEAN] = x[n:n + k]
-            n += k
-            if decide.decided(n, out_row):
-                break
         status = ds.attrs.get("velocity_status", "")
         out, _ = run_outcome(cfg, status, time, x)
-        status_r, _, _ = dead_weight_status(c, time[:n], x[:n])
-        out_r, _ = run_outcome(c, status_r, time[:n], x[:n])
-        rows.append({"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c,
-                     "theta": cfg.theta, "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": ramp, "t_decide": cfg.t_decide,
-                     "status": status, "outcome": out, "t_end": float(time[-1]), "t_decide_replay": float(t_decide),
-                     "t_stop": float(time[n - 1]), "status_replay": status_r, "outcome_replay": out_r,
-                     "agree": SIDES[out] == SIDES[out_r]})
+        for t_decide in t_decides:
+            if not ramp < t_decide:
+                skipped[float(t_decide)] += 1
+                continue
+            row = _replay(cfg, time, x, float(t_decide), ramp)
+            rows.append({"store": store, "member_id": mid, **row, "status": status, "outcome": out, "t_end": float(time[-1]),
+                         "agree": SIDES[out] == SIDES[row["outcome_replay"]]})
     return pd.DataFrame(rows), skipped
+
+
+def _replay(cfg, time: np.ndarray, x: np.ndarray, t_decide: float, ramp: float) -> dict:
+    """:func:`redecide` for one stored record at one ``t_decide``: the identifying columns and the replay's."""
+    from ..engine.control import DeadWeightRamp, UntilDecided, chunk_samples
+    from ..engine.scheme import O_XUMEAN
+    from ..results.schema import dead_weight_status
+
+    c = cfg.model_copy(update={"t_decide": t_decide, "t_ramp": ramp})
+    interval = c.output_interval
+    decide = UntilDecided(c, interval, max(1, int(round(t_decide / interval))))
+    ramp_ = DeadWeightRamp(0.0, max(1, int(round(ramp / interval))))
+    chunk, n = chunk_samples(c, interval), 0
+    while n < time.size:  # the chunks the run's driver gave it (engine.driver.drive: a sample at a time while
+        k = min(chunk, time.size - n, ramp_.max_samples(n))  # the weight rises), each checked at its end
+        out_row = np.zeros((k, O_XUMEAN + 1))
+        out_row[:, O_XUMEAN] = x[n:n + k]
+        n += k
+        if decide.decided(n, out_row):
+            break
+    status_r, _, _ = dead_weight_status(c, time[:n], x[:n])
+    out_r, _ = run_outcome(c, status_r, time[:n], x[:n])
+    return {"N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c, "theta": cfg.theta, "seed": cfg.seed,
+            "mu_a": cfg.dead_weight, "t_ramp": ramp, "t_decide": cfg.t_decide, "t_decide_replay": t_decide,
+            "t_stop": float(time[n - 1]), "status_replay": status_r, "outcome_replay": out_r}
 
 
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:

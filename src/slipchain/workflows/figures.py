@@ -168,12 +168,10 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
                   write_csv(check, Path(out) / "branch_check.csv", float_format="%.6g"),
                   write_csv(at_v, Path(out) / "branch_mu.csv", float_format="%.6g")]
     replays = []
-    for t_decide in redecide:
-        table, skipped = replay(stores, t_decide)
-        replays.append((t_decide, table, skipped))
-    if replays:
-        paths.append(write_csv(pd.concat([t for _, t, _ in replays], ignore_index=True), Path(out) / "redecide.csv",
-                               float_format="%.6g"))
+    if redecide:
+        table, skipped = replay(stores, redecide)
+        paths.append(write_csv(table, Path(out) / "redecide.csv", float_format="%.6g"))
+        replays = [(t, table[table["t_decide_replay"] == t] if len(table) else table, skipped[float(t)]) for t in redecide]
     lines = []
     for t_decide, table, skipped in replays:
         if not len(table):
