@@ -306,22 +306,21 @@ def redecide(stores: list[str | os.PathLike], t_decides: list[float] | tuple[flo
 
 def _replay(cfg, time: np.ndarray, x: np.ndarray, t_decide: float, ramp: float) -> dict:
     """:func:`redecide` for one stored record at one ``t_decide``: the identifying columns and the replay's."""
-    from ..engine.control import DeadWeightRamp, UntilDecided, chunk_samples
+    from ..engine.control import DeadWeightRamp, RowControl, UntilDecided, chunk_samples
     from ..engine.scheme import O_XUMEAN
     from ..results.schema import dead_weight_status
 
     c = cfg.model_copy(update={"t_decide": t_decide, "t_ramp": ramp})
     interval = c.output_interval
-    decide = UntilDecided(c, interval, max(1, int(round(t_decide / interval))))
-    ramp_ = DeadWeightRamp(0.0, max(1, int(round(ramp / interval))))
-    chunk, n = chunk_samples(c, interval), 0
-    while n < time.size:  # the chunks the run's driver gave it (engine.driver.drive: a sample at a time while
-        k = min(chunk, time.size - n, ramp_.max_samples(n))  # the weight rises), each checked at its end
+    row = RowControl(limit=time.size, ramp=DeadWeightRamp(0.0, max(1, int(round(ramp / interval)))),
+                     decide=UntilDecided(c, interval, max(1, int(round(t_decide / interval)))))
+    chunk = chunk_samples(c, interval)
+    while row.active:  # the chunks the run's driver gave it (engine.driver.drive), each checked at its end
+        k = row.next_samples(chunk)
         out_row = np.zeros((k, O_XUMEAN + 1))
-        out_row[:, O_XUMEAN] = x[n:n + k]
-        n += k
-        if decide.decided(n, out_row):
-            break
+        out_row[:, O_XUMEAN] = x[row.n:row.n + k]
+        row.after_chunk(k, out_row)
+    n = row.n
     status_r, _, _ = dead_weight_status(c, time[:n], x[:n])
     out_r, _ = run_outcome(c, status_r, time[:n], x[:n])
     return {"N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c, "theta": cfg.theta, "seed": cfg.seed,

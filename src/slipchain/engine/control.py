@@ -265,6 +265,14 @@ class RowControl:
         (slip cycles of seconds: the per-contact sums are kept in records of whole chunks)."""
         return max(chunk, self.long_chunk) if self.extended else chunk
 
+    def next_samples(self, chunk: int) -> int:
+        """Samples this row may run in the next compiled call: :meth:`chunk_cap`, at most what it has left,
+        one while its dead weight rises (:meth:`DeadWeightRamp.max_samples`). The driver runs a batch for
+        the least of its live rows'; a replay of a stored record (:func:`slipchain.analysis.traces.redecide`)
+        follows the same chunks."""
+        n = min(self.chunk_cap(chunk), self.remaining)
+        return n if self.ramp is None else min(n, self.ramp.max_samples(self.n))
+
     def after_chunk(self, n: int, out_row: np.ndarray) -> None:
         """Account for ``n`` samples just run (``out_row`` holds them) and decide whether to stop."""
         self.n += n

@@ -48,7 +48,7 @@ def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_
     try:
         while any(c.active for c in controls):
             live = [i for i, c in enumerate(controls) if c.active]
-            n = min(min(controls[i].chunk_cap(chunk) for i in live), min(controls[i].remaining for i in live))
+            n = min(controls[i].next_samples(chunk) for i in live)
             f_now = np.zeros(len(controls))
             sum_x0 = batch.X.sum(axis=1)
             for i in live:
@@ -56,7 +56,6 @@ def drive(backend: Backend, batch: Batch, controls: list[RowControl], *, sample_
                 if ramp is not None:
                     f_now[i] = ramp.force(controls[i].n)
                     batch.params[i, S.P_FCONST] = f_now[i]
-                    n = min(n, ramp.max_samples(controls[i].n))
             co = backend.advance(batch, n, sample_steps)
             co.acc[:, S.A_WDRIVE] += f_now * (batch.X.sum(axis=1) - sum_x0)  # work of the constant forces
             for obs in observers:
