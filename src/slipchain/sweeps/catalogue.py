@@ -138,7 +138,7 @@ CATALOGUE: dict[str, Study] = {
                               "tester-64-long-5's theta = 0.2 at 0.6 and 0.65, after it ran away at 0.7 (seed 0)"),
     "tester-64-long-seeds": Study("study", 4, "all 4 run (seed 1: theta = 0.05 held at 0.8, 4 900 s; theta = 0.5 ran away at 0.7, 9 398 s; one core each of a 2-core AMD EPYC without AVX-512; seed 2: held, 707 s; ran away, 4 527 s; one core each of a 2-core AMD EPYC with AVX-512)", "docs/tester-3d/index.md",
                                   "tester-64-long for seeds 1 and 2 at seed 0's bounding weights: theta = 0.05 at 0.8, theta = 0.5 at 0.7"),
-    "tester-64-long-seeds-2": Study("study", 4, "0 of 4 run; two checkpointed at 0.40 s simulated (about 1 000 s each)", "docs/tester-3d/index.md",
+    "tester-64-long-seeds-2": Study("study", 4, "4 of 4 run: held at 0.65 (1 121, 1 122 s), ran away at 0.7 (2 754, 2 666 s; one core each of a 2-core AMD EPYC with AVX-512)", "docs/tester-3d/index.md",
                                     "tester-64-long-seeds at theta = 0.2, seed 0's bracket 0.65 and 0.7 (seeds 1, 2)"),
     "tester-64-long-seeds-3": Study("study", 4, "0 of 4 run", "docs/tester-3d/index.md",
                                     "tester-64-long-seeds at theta = 1, seed 0's bracket 0.75 and 0.85 (seeds 1, 2)"),
