@@ -140,7 +140,7 @@ CATALOGUE: dict[str, Study] = {
                                   "tester-64-long for seeds 1 and 2 at seed 0's bounding weights: theta = 0.05 at 0.8, theta = 0.5 at 0.7"),
     "tester-64-long-seeds-2": Study("study", 4, "4 of 4 run: held at 0.65 (1 121, 1 122 s), ran away at 0.7 (2 754, 2 666 s; one core each of a 2-core AMD EPYC with AVX-512)", "docs/tester-3d/index.md",
                                     "tester-64-long-seeds at theta = 0.2, seed 0's bracket 0.65 and 0.7 (seeds 1, 2)"),
-    "tester-64-long-seeds-3": Study("study", 4, "0 of 4 run", "docs/tester-3d/index.md",
+    "tester-64-long-seeds-3": Study("study", 4, "0 of 4 run; theta = 1 at 0.75 checkpointed for seeds 1 and 2 at 1.36 and 1.68 s (about 2 340 s each, slowing to 6e-3 and 1e-3 m/s)", "docs/tester-3d/index.md",
                                     "tester-64-long-seeds at theta = 1, seed 0's bracket 0.75 and 0.85 (seeds 1, 2)"),
     "tester-64-slower": Study("study", 8, "5 of 8 run: the steady side, 502-645 s each, and theta = 1 at 1.05, 2 395 s (a Zen 5 EPYC)", "docs/tester-3d/index.md",
                               "tester-32-slower on a 64 x 64 interface (seed 0)"),
