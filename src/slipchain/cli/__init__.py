@@ -3,6 +3,8 @@
 * ``slipchain run [CONFIG.toml] [--set name=value ...] [--out FILE.nc] [--json] [--backend cpu|gpu|auto]``: one run.
 * ``slipchain sweep SWEEP.toml|NAME --store PATH [--scheduler ADDRESS] [--workers N] [--backend ...] [--dry-run]``:
   a sweep on Dask (NAME: a shipped preset, ``slipchain presets`` lists them).
+* ``slipchain status --store PATH [--json]``: where a sweep store stands (stored, in flight with its checkpoint's
+  simulated and wall time, failed, pending; the driver running it), read beside a running sweep.
 * ``slipchain reproduce [--preset quick|paper|fold|eps1|eps1-check|eps01|adaptive] [--store PATH] [--out DIR]``: the main job.
 * ``slipchain mu-max [PLAN.toml|NAME] --out DIR [--dry-run]``: mu_max(theta) under a dead weight by bisection.
 * ``slipchain presets``: the shipped presets and plans by name, with their purpose, runs and wall time.
@@ -28,7 +30,7 @@ from .dead_weight import mu_max
 from .figure import figure_app
 from .material import material_app
 from .run import run
-from .sweep import mechanism, presets, print_sweep_report, reproduce, sweep
+from .sweep import mechanism, presets, print_sweep_report, reproduce, status, sweep
 from .tester import tester_app
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -55,6 +57,7 @@ def _main(
 
 app.command()(run)
 app.command()(sweep)
+app.command()(status)
 app.add_typer(figure_app, name="figure")
 app.command()(mechanism)
 app.add_typer(tester_app, name="tester")

@@ -85,6 +85,46 @@ def presets() -> None:
     out.print(table)
 
 
+def status(
+    store: Annotated[Path, typer.Option("--store", help="A sweep store (slipchain sweep --store): safe to read while "
+                                        "its sweep runs.")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object instead of the table.")] = False,
+) -> None:
+    """Where a sweep store stands: each member stored (and what it found), in flight (how far its checkpoint has got,
+    at what wall time), failed or pending, and whether a driver runs it now. Reads only; starts nothing."""
+    from ..sweeps.status import IN_FLIGHT, store_status
+
+    try:
+        st = store_status(store)
+    except SweepError as e:
+        fail(str(e))
+    if as_json:
+        sys.stdout.write(st.to_json() + "\n")
+        return
+    table = Table(title=f"slipchain status: {st.path} (sweep {st.sweep!r})")
+    for col in ("member", "state", "t / t_max (s)", "wall (s)", "wall/sim", "outcome, message"):
+        table.add_column(col, overflow="fold", justify="right" if col.startswith(("t ", "wall")) else "left")
+    for m in st.members:
+        t = "" if m.t_simulated is None else f"{m.t_simulated:.4g} / {m.t_max:g}"
+        wall = "" if m.wall_time_s is None else f"{m.wall_time_s:,.0f}"
+        rate = (f"{m.wall_time_s / m.t_simulated:,.0f}" if m.wall_time_s is not None and m.t_simulated else "")
+        said = ", ".join(x for x in (m.outcome or (m.status if m.status != Status.COMPLETED else None), m.message) if x)
+        table.add_row(m.label or "(single run)", m.state, t, wall, rate, said if len(said) <= 48 else said[:47] + "…")
+    out.print(table)
+    counts = ", ".join(f"{n} {k}" for k, n in st.counts().items() if n)
+    out.print(f"{len(st.members)} members: {counts}. Driver: {st.driver}.", markup=False, highlight=False, soft_wrap=True)
+    written = sorted(m.written for m in st.members if m.state == IN_FLIGHT and m.written)
+    if written:
+        out.print(f"Checkpoints written {written[0]}" + (f" to {written[-1]}" if written[-1] != written[0] else "") +
+                  " (wall/sim: wall seconds per simulated second so far; --json: member ids, messages in full).",
+                  markup=False, highlight=False, soft_wrap=True)
+    if st.stray_checkpoints:
+        out.print(f"{len(st.stray_checkpoints)} checkpoint(s) of no member of this sweep (batched differently; the "
+                  f"next slipchain sweep prunes them): {', '.join(st.stray_checkpoints)}", markup=False, soft_wrap=True)
+    for reason in st.unreadable_checkpoints:
+        out.print(f"unreadable: {reason}", markup=False, highlight=False, soft_wrap=True)
+
+
 def _dry_run(definition: Path, store: Path, reuse: list[Path], only: dict[str, list[str]]) -> None:
     from ..engine.memory import estimate_bytes
     from ..sweeps.store import Store, reuse_source

@@ -240,4 +240,35 @@ def simulated_time(path: str | Path) -> float:
         return float("nan")
 
 
-__all__ = ["CHECKPOINT_EVERY", "CheckpointError", "Checkpointer", "Restored", "simulated_time"]
+@dataclass(frozen=True)
+class CheckpointRow:
+    """What a checkpoint says of one of its runs (:func:`checkpoint_rows`), without its state."""
+
+    config: str  # the run's config TOML (as the run's System wrote it)
+    samples_done: int  # output samples so far: the run has reached samples_done * output_interval s
+    status: str  # the row's status so far ("completed" while it runs)
+    message: str
+    active: bool  # False once the row's run has ended (its batch goes on for the others)
+
+
+def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
+    """The attributes of a checkpoint (wall_time_s, t_simulated, written, ...) and one
+    :class:`CheckpointRow` per run in it, reading only those variables (for ``slipchain status``).
+
+    Safe beside a running task: a checkpoint is replaced atomically, never written in place.
+    Raises :class:`CheckpointError` for a file that is not a readable checkpoint.
+    """
+    from ..results.io import ENGINE
+
+    try:
+        with xr.open_dataset(path, engine=ENGINE) as ds:
+            attrs = dict(ds.attrs)
+            cols = [np.atleast_1d(ds[v].values) for v in ("config", "samples_done", "row_status", "row_message", "active")]
+    except Exception as e:  # noqa: BLE001 - h5py's OSError, xarray's ValueError, a KeyError: not a whole checkpoint
+        raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
+    rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a)) for c, n, st, msg, a in zip(*cols)]
+    return attrs, rows
+
+
+__all__ = ["CHECKPOINT_EVERY", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored", "checkpoint_rows",
+           "simulated_time"]

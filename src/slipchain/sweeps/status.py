@@ -1,0 +1,159 @@
+"""Where a sweep store stands: each member stored, failed, in flight (checkpointed) or pending.
+
+A long sweep (hours a member) is run in parts, often by different sessions or batch jobs: one
+invocation is stopped (Ctrl-C, SIGTERM, a time limit) and the next resumes from the store. Between
+them a researcher wants to know, without starting anything, what is finished and what it found, how
+far each checkpointed run has got and at what cost, and whether a driver is running it now.
+:func:`store_status` reads only what the store already holds:
+
+* ``members/<id>.nc`` and ``failed/<id>.nc``: their attributes (status, the run's length ``t_total``,
+  its ``wall_time_s``; for a dead-weight run its ``velocity_status``, e.g. runaway or held);
+* ``checkpoints/<key>.nc``: each run's config and samples done (:func:`slipchain.engine.checkpoint.
+  checkpoint_rows`), matched to its member by the config text, and the wall time the task has
+  spent so far (summed over resumes);
+* ``driver.json``: the driver that holds the store, if any.
+
+It takes no lock and writes nothing, so it is safe beside a running sweep: member files and
+checkpoints are replaced atomically, never written in place. ``slipchain status --store PATH`` prints it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from ..engine.checkpoint import CheckpointError, checkpoint_rows
+from ..results.schema import Status
+from .definition import Member, SweepError
+from .store import CHECKPOINTS, DEFINITION, HOLDER, Store
+
+STORED, FAILED, IN_FLIGHT, PENDING, UNREADABLE = "stored", "failed", "in flight", "pending", "unreadable"
+
+
+@dataclass(frozen=True)
+class MemberStatus:
+    """One member of the sweep, as the store shows it now."""
+
+    id: str
+    label: str  # its sweep coordinates, e.g. "theta=1, dead_weight=0.75, seed=1"
+    state: str  # stored | failed | in flight | pending | unreadable
+    status: str | None  # the run's recorded status (completed, diverged, ...); None while in flight or pending
+    outcome: str | None  # a dead-weight run's velocity_status (ok, runaway, no-steady, ...), else None
+    message: str  # the run's message or velocity_reason; a checkpointed row's message so far
+    t_simulated: float | None  # simulated s reached (stored: t_total; in flight: from the checkpoint)
+    t_max: float  # the config's t_max (a run may stop earlier: automatic length, a decided dead weight)
+    wall_time_s: float | None  # wall s spent (in flight: the task's, over all its resumes)
+    written: str | None  # when the checkpoint was written (in flight only)
+
+
+@dataclass(frozen=True)
+class StoreStatus:
+    """A store's members (:class:`MemberStatus`, in definition order), its driver and stray checkpoints."""
+
+    path: str
+    sweep: str
+    members: list[MemberStatus]
+    driver: str  # who runs the store now, in words
+    stray_checkpoints: list[str]  # checkpoint files of no member of this sweep (the next sweep prunes them)
+    unreadable_checkpoints: list[str]  # checkpoint files that could not be read, with the reason
+
+    def counts(self) -> dict[str, int]:
+        out: dict[str, int] = {s: 0 for s in (STORED, IN_FLIGHT, FAILED, PENDING, UNREADABLE)}
+        for m in self.members:
+            out[m.state] += 1
+        return out
+
+    def to_json(self) -> str:
+        return json.dumps({**asdict(self), "counts": self.counts()}, indent=1, default=str)
+
+
+def store_status(path: str | os.PathLike) -> StoreStatus:
+    """The status of the sweep store at ``path`` (see the module docstring).
+
+    Raises :class:`~slipchain.sweeps.definition.SweepError` if ``path`` is not a sweep store.
+    """
+    path = Path(path)
+    if not path.is_dir():
+        raise SweepError(f"--store {str(path)!r}: no such directory; expected a slipchain sweep store "
+                         "(a directory with sweep.toml, written by slipchain sweep)")
+    if not (path / DEFINITION).is_file():
+        raise SweepError(f"--store {str(path)!r}: not a slipchain sweep store (no {DEFINITION} in it); expected a "
+                         "directory written by slipchain sweep")
+    try:
+        st = Store.open(path)
+    except SweepError as e:  # a sweep.toml that cannot be read
+        raise SweepError(f"--store {str(path)!r}: {e}") from None
+    by_config = {m.config.to_toml(): m for m in st.sweep.members}
+    flying: dict[str, tuple[Any, dict]] = {}
+    stray, unreadable = [], []
+    for ck in sorted((path / CHECKPOINTS).glob("*.nc")):
+        if ck.name.startswith("."):  # a write in progress (temporary file)
+            continue
+        try:
+            attrs, rows = checkpoint_rows(ck)
+        except CheckpointError as e:
+            unreadable.append(str(e))
+            continue
+        mine = [r for r in rows if r.config in by_config]
+        if not mine:
+            stray.append(ck.name)
+        for r in mine:
+            flying[by_config[r.config].id] = (r, attrs)
+    done, failed = st.completed_ids(), st.failed_ids()
+    members = [_member_status(st, m, m.id in done, m.id in failed, flying.get(m.id)) for m in st.sweep.members]
+    return StoreStatus(str(path), st.sweep.name, members, _driver(path), stray, unreadable)
+
+
+def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> MemberStatus:
+    t_max = float(m.config.t_max)
+    if done or (failed and flying is None):
+        a = st.member_attrs(m) or {}
+        if a.get("status") == Status.UNREADABLE.value:
+            return MemberStatus(m.id, m.label(), UNREADABLE, None, None, str(a.get("message", "")), None, t_max, None, None)
+        outcome = a.get("velocity_status")
+        # a completed dead-weight run: why it is steady, held or a runaway; anything else: why it failed
+        message = a.get("velocity_reason") if outcome and a.get("status") == Status.COMPLETED.value else a.get("message")
+        return MemberStatus(m.id, m.label(), STORED if done else FAILED, a.get("status"), outcome, str(message or ""),
+                            _float(a.get("t_total")), t_max, _float(a.get("wall_time_s")), None)
+    if flying is not None:
+        row, attrs = flying
+        t = row.samples_done * float(m.config.output_interval)
+        return MemberStatus(m.id, m.label(), IN_FLIGHT, None, None, row.message, t, t_max,
+                            _float(attrs.get("wall_time_s")), attrs.get("written"))
+    return MemberStatus(m.id, m.label(), PENDING, None, None, "", None, t_max, None, None)
+
+
+def _float(v: Any) -> float | None:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def _driver(path: Path) -> str:
+    """Who runs the store now, from driver.json (present while a driver runs, or after one was killed)."""
+    record = path / HOLDER
+    if not record.exists():
+        return "no driver (none is running it)"
+    try:
+        h = json.loads(record.read_text())
+        host, pid, started = str(h["host"]), int(h["pid"]), str(h["started"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return "a driver is starting (its record is not complete yet)"
+    who = f"host {host}, pid {pid}, started {started}"
+    if host != socket.gethostname():
+        return f"recorded driver on another host ({who}): running unless it was killed there"
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return f"no driver: the last one ({who}) was killed; the next slipchain sweep resumes from the checkpoints"
+    except PermissionError:  # alive, another user's
+        pass
+    return f"running ({who})"
+
+
+__all__ = ["FAILED", "IN_FLIGHT", "PENDING", "STORED", "UNREADABLE", "MemberStatus", "StoreStatus", "store_status"]

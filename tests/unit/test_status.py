@@ -1,0 +1,101 @@
+"""slipchain status / sweeps.status.store_status: where a store stands, read from its files alone.
+
+Each state is made the way a sweep makes it (a member written by the store, a checkpoint written by a run
+that was not stored, a failed file), and what the status reports is checked against that run's own
+result: the simulated time a checkpoint has reached against the run's record, the outcome against the
+member's attributes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+
+import pytest
+
+from slipchain import make_config, run
+from slipchain.results.io import write_text_atomic
+from slipchain.sweeps.definition import make_sweep
+from slipchain.sweeps.status import FAILED, IN_FLIGHT, PENDING, STORED, store_status
+from slipchain.sweeps.store import HOLDER, Store
+from slipchain.workflows.dead_weight import single_contact_maximum
+
+IDENTICAL = dict(N=11, theta=1.0, delta=0.0, start="rest")
+
+
+def _sweep(f_max: float):
+    base = {**IDENTICAL, "t_ramp": 1e-4, "t_decide": 2e-3, "t_max": 4e-3, "output_interval": 2.5e-6, "dead_weight": 1.0}
+    return make_sweep({"name": "release", "base": base,
+                       "grid": {"dead_weight": [0.8 * f_max, 0.9 * f_max, 1.2 * f_max, 1.3 * f_max]}})
+
+
+def test_store_status_reports_each_state_from_the_files(tmp_path):
+    f_max, _ = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
+    sweep = _sweep(f_max)
+    st = Store.open(tmp_path / "s", sweep)
+    stored, flying, failed, pending = sweep.members
+    ds = run(stored.config)
+    st.write_member(stored, ds)
+    # a run checkpointed but not stored (a task killed after its last checkpoint): the file holds its whole record
+    full = run(flying.config, checkpoint=st.checkpoint_path([flying]))
+    bad = run(failed.config)
+    bad.attrs.update(status="diverged", message="diverged at step 7 (t = 1e-6 s): test")
+    st.write_member(failed, bad)  # a status other than completed goes to failed/
+    # a checkpoint of a config that is no member of this sweep (another batching, another sweep): stray
+    run(flying.config.model_copy(update={"t_max": 2e-3, "t_decide": 1e-3}), checkpoint=tmp_path / "s" / "checkpoints" / "other.nc")
+    (tmp_path / "s" / "checkpoints" / "broken.nc").write_bytes(b"not a netcdf file")
+
+    s = store_status(tmp_path / "s")
+    by = {m.id: m for m in s.members}
+    assert [m.id for m in s.members] == [m.id for m in sweep.members]  # definition order
+    assert s.counts() == {STORED: 1, IN_FLIGHT: 1, FAILED: 1, PENDING: 1, "unreadable": 0}
+    a = by[stored.id]
+    assert (a.state, a.status, a.outcome) == (STORED, "completed", ds.attrs["velocity_status"])
+    assert a.t_simulated == pytest.approx(float(ds.attrs["t_total"])) and a.wall_time_s == ds.attrs["wall_time_s"]
+    assert a.message == ds.attrs["velocity_reason"]
+    f = by[flying.id]
+    assert f.state == IN_FLIGHT and f.t_max == flying.config.t_max and f.written
+    # the checkpoint's samples against the run's own record: two readings of how far it got
+    assert f.t_simulated == pytest.approx(float(full["time"].values[-1]), rel=1e-9) and f.wall_time_s > 0
+    b = by[failed.id]
+    assert (b.state, b.status) == (FAILED, "diverged") and "step 7" in b.message
+    assert by[pending.id].state == PENDING and by[pending.id].t_simulated is None
+    assert s.stray_checkpoints == ["other.nc"]
+    assert len(s.unreadable_checkpoints) == 1 and "broken.nc" in s.unreadable_checkpoints[0]
+    assert s.driver.startswith("no driver")
+    # once stored, the member is stored whatever checkpoint is left (the next sweep prunes it)
+    st.write_member(flying, full)
+    assert store_status(tmp_path / "s").counts()[STORED] == 2
+
+
+def test_store_status_driver_record(tmp_path):
+    f_max, _ = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
+    st = Store.open(tmp_path / "s", _sweep(f_max))
+    record = tmp_path / "s" / HOLDER
+    write_text_atomic(record, json.dumps({"host": socket.gethostname(), "pid": os.getpid(), "started": "T0"}))
+    assert store_status(st.path).driver.startswith("running (") and f"pid {os.getpid()}" in store_status(st.path).driver
+    dead = 2**22 + 12345  # above Linux's default pid_max (2**22): no such process
+    write_text_atomic(record, json.dumps({"host": socket.gethostname(), "pid": dead, "started": "T0"}))
+    assert "was killed" in store_status(st.path).driver
+    write_text_atomic(record, json.dumps({"host": "elsewhere.example", "pid": 1, "started": "T0"}))
+    assert "another host" in store_status(st.path).driver
+    assert store_status(st.path).counts()[PENDING] == 4
+
+
+def test_cli_status_table_json_and_bad_store(tmp_path, slipchain_cli, store_of_runs):
+    f_max, _ = single_contact_maximum(make_config(**IDENTICAL, t_total=5e-3))
+    sweep = _sweep(f_max)
+    st = store_of_runs(tmp_path / "s", sweep)
+    r = slipchain_cli("status", "--store", tmp_path / "s")
+    assert r.returncode == 0, r.stderr
+    assert "4 members: 4 stored" in r.stdout and "runaway" in r.stdout
+    j = slipchain_cli("status", "--store", tmp_path / "s", "--json")
+    got = json.loads(j.stdout)
+    assert got["counts"]["stored"] == 4 and got["sweep"] == "release"
+    assert [m["outcome"] for m in got["members"]] == [st.member_attrs(m)["velocity_status"] for m in sweep.members]
+    (tmp_path / "empty").mkdir()
+    for bad, says in ((tmp_path / "none", "no such directory"), (tmp_path / "empty", "not a slipchain sweep store")):
+        b = slipchain_cli("status", "--store", bad)
+        assert b.returncode == 2 and "--store" in b.stderr and says in b.stderr and str(bad) in b.stderr, b.stderr
+    assert sorted(p.name for p in (tmp_path / "empty").iterdir()) == []  # nothing written
