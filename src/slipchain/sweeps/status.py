@@ -8,9 +8,9 @@ far each checkpointed run has got and at what cost, and whether a driver is runn
 
 * ``members/<id>.nc`` and ``failed/<id>.nc``: their attributes (status, the run's length ``t_total``,
   its ``wall_time_s``; for a dead-weight run its ``velocity_status``, e.g. runaway or held);
-* ``checkpoints/<key>.nc``: each run's config and samples done (:func:`slipchain.engine.checkpoint.
-  checkpoint_rows`), matched to its member by the config text, and the wall time the task has
-  spent so far (summed over resumes);
+* ``checkpoints/<key>.nc``: each run's config and samples done
+  (:func:`~slipchain.engine.checkpoint.checkpoint_rows`), matched to its member by the config text,
+  and the wall time the task has spent so far (summed over resumes);
 * ``driver.json``: the driver that holds the store, if any.
 
 It takes no lock and writes nothing, so it is safe beside a running sweep: member files and
