@@ -15,6 +15,7 @@ import socket
 import pytest
 
 from slipchain import make_config, run
+from slipchain.engine.checkpoint import RECENT_WINDOW
 from slipchain.results.io import write_text_atomic
 from slipchain.sweeps.definition import make_sweep
 from slipchain.sweeps.status import FAILED, IN_FLIGHT, PENDING, STORED, store_status
@@ -58,6 +59,9 @@ def test_store_status_reports_each_state_from_the_files(tmp_path):
     assert f.state == IN_FLIGHT and f.t_max == flying.config.t_max and f.written
     # the checkpoint's samples against the run's own record: two readings of how far it got
     assert f.t_simulated == pytest.approx(float(full["time"].values[-1]), rel=1e-9) and f.wall_time_s > 0
+    k = round(RECENT_WINDOW / flying.config.output_interval) + 1  # the top's velocity now: the record's last 10 ms
+    X, t = full["X_mean"].values[-k:], full["time"].values[-k:]
+    assert f.velocity == pytest.approx((X[-1] - X[0]) / (t[-1] - t[0]), rel=1e-9) and abs(f.velocity) > 0
     b = by[failed.id]
     assert (b.state, b.status) == (FAILED, "diverged") and "step 7" in b.message
     assert by[pending.id].state == PENDING and by[pending.id].t_simulated is None

@@ -109,6 +109,8 @@ def status(
         wall = "" if m.wall_time_s is None else f"{m.wall_time_s:,.0f}"
         rate = (f"{m.wall_time_s / m.t_simulated:,.0f}" if m.wall_time_s is not None and m.t_simulated else "")
         said = ", ".join(x for x in (m.outcome or (m.status if m.status != Status.COMPLETED else None), m.message) if x)
+        if m.velocity is not None and m.velocity == m.velocity:  # (not nan)
+            said = f"<X> moves at {m.velocity:.3g} m/s" + (f"; {said}" if said else "")
         table.add_row(m.label or "(single run)", m.state, t, wall, rate, said if len(said) <= 48 else said[:47] + "…")
     out.print(table)
     counts = ", ".join(f"{n} {k}" for k, n in st.counts().items() if n)
@@ -116,7 +118,8 @@ def status(
     written = sorted(m.written for m in st.members if m.state == IN_FLIGHT and m.written)
     if written:
         out.print(f"Checkpoints written {written[0]}" + (f" to {written[-1]}" if written[-1] != written[0] else "") +
-                  " (wall/sim: wall seconds per simulated second so far; --json: member ids, messages in full).",
+                  " (wall/sim: wall seconds per simulated second so far; <X>: the upper layer, the tester's top, over the last "
+                  "10 ms; --json: member ids, messages in full).",
                   markup=False, highlight=False, soft_wrap=True)
     if st.stray_checkpoints:
         out.print(f"{len(st.stray_checkpoints)} checkpoint(s) of no member of this sweep (batched differently; the "

@@ -30,6 +30,7 @@ A checkpoint names its configs; resuming with another config is refused (:class:
 from __future__ import annotations
 
 import time
+import tomllib
 import warnings
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -249,11 +250,17 @@ class CheckpointRow:
     status: str  # the row's status so far ("completed" while it runs)
     message: str
     active: bool  # False once the row's run has ended (its batch goes on for the others)
+    velocity: float  # d<X>/dt over the record's last RECENT_WINDOW s (m/s; the rigid top's under a dead weight), nan if < 2 samples
+
+
+RECENT_WINDOW = 0.01  # s: the stretch of the record over which checkpoint_rows reads the upper layer's velocity
 
 
 def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
     """The attributes of a checkpoint (wall_time_s, t_simulated, written, ...) and one
-    :class:`CheckpointRow` per run in it, reading only those variables (for ``slipchain status``).
+    :class:`CheckpointRow` per run in it, reading only those variables and the last samples of each
+    record (for ``slipchain status``: how far a run has got, and how fast its upper layer, or the
+    tester's top, moves now: whether a dead weight is running away or coming back).
 
     Safe beside a running task: a checkpoint is replaced atomically, never written in place.
     Raises :class:`CheckpointError` for a file that is not a readable checkpoint.
@@ -264,11 +271,19 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
         with xr.open_dataset(path, engine=ENGINE) as ds:
             attrs = dict(ds.attrs)
             cols = [np.atleast_1d(ds[v].values) for v in ("config", "samples_done", "row_status", "row_message", "active")]
+            recent = []
+            for r, text in enumerate(cols[0]):
+                rec = ds[f"rec_samples_{r}"]
+                interval = float(tomllib.loads(str(text))["output_interval"])  # the samples' spacing (s)
+                k = max(1, int(round(RECENT_WINDOW / interval)))
+                tail = np.asarray(rec[-(k + 1):, S.O_XUMEAN].values, dtype=float)
+                recent.append((tail[-1] - tail[0]) / ((tail.size - 1) * interval) if tail.size >= 2 else np.nan)
     except Exception as e:  # noqa: BLE001 - h5py's OSError, xarray's ValueError, a KeyError: not a whole checkpoint
         raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
-    rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a)) for c, n, st, msg, a in zip(*cols)]
+    rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a), float(v))
+            for c, n, st, msg, a, v in zip(*cols, recent)]
     return attrs, rows
 
 
-__all__ = ["CHECKPOINT_EVERY", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored", "checkpoint_rows",
-           "simulated_time"]
+__all__ = ["CHECKPOINT_EVERY", "RECENT_WINDOW", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored",
+           "checkpoint_rows", "simulated_time"]

@@ -48,6 +48,7 @@ class MemberStatus:
     t_max: float  # the config's t_max (a run may stop earlier: automatic length, a decided dead weight)
     wall_time_s: float | None  # wall s spent (in flight: the task's, over all its resumes)
     written: str | None  # when the checkpoint was written (in flight only)
+    velocity: float | None  # in flight: d<X>/dt over the record's last 10 ms (m/s; the tester's top under a dead weight)
 
 
 @dataclass(frozen=True)
@@ -113,18 +114,19 @@ def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> Me
     if done or (failed and flying is None):
         a = st.member_attrs(m) or {}
         if a.get("status") == Status.UNREADABLE.value:
-            return MemberStatus(m.id, m.label(), UNREADABLE, None, None, str(a.get("message", "")), None, t_max, None, None)
+            return MemberStatus(m.id, m.label(), UNREADABLE, None, None, str(a.get("message", "")), None, t_max, None, None,
+                                None)
         outcome = a.get("velocity_status")
         # a completed dead-weight run: why it is steady, held or a runaway; anything else: why it failed
         message = a.get("velocity_reason") if outcome and a.get("status") == Status.COMPLETED.value else a.get("message")
         return MemberStatus(m.id, m.label(), STORED if done else FAILED, a.get("status"), outcome, str(message or ""),
-                            _float(a.get("t_total")), t_max, _float(a.get("wall_time_s")), None)
+                            _float(a.get("t_total")), t_max, _float(a.get("wall_time_s")), None, None)
     if flying is not None:
         row, attrs = flying
         t = row.samples_done * float(m.config.output_interval)
         return MemberStatus(m.id, m.label(), IN_FLIGHT, None, None, row.message, t, t_max,
-                            _float(attrs.get("wall_time_s")), attrs.get("written"))
-    return MemberStatus(m.id, m.label(), PENDING, None, None, "", None, t_max, None, None)
+                            _float(attrs.get("wall_time_s")), attrs.get("written"), row.velocity)
+    return MemberStatus(m.id, m.label(), PENDING, None, None, "", None, t_max, None, None, None)
 
 
 def _float(v: Any) -> float | None:
