@@ -98,8 +98,19 @@ def test_cli_status_table_json_and_bad_store(tmp_path, slipchain_cli, store_of_r
     got = json.loads(j.stdout)
     assert got["counts"]["stored"] == 4 and got["sweep"] == "release"
     assert [m["outcome"] for m in got["members"]] == [st.member_attrs(m)["velocity_status"] for m in sweep.members]
+    # a mu-max output directory: one store per round (OUT/rounds/<digest>), each reported
+    small = make_sweep({"name": "round-2", "base": {**IDENTICAL, "t_ramp": 1e-4, "t_decide": 2e-3, "t_max": 4e-3,
+                                                    "output_interval": 2.5e-6, "dead_weight": 1.0},
+                        "grid": {"dead_weight": [f_max]}})
+    store_of_runs(tmp_path / "mm" / "rounds" / "r1", sweep)
+    store_of_runs(tmp_path / "mm" / "rounds" / "r2", small)
+    m = slipchain_cli("status", "--store", tmp_path / "mm")
+    assert m.returncode == 0, m.stderr
+    assert "4 members: 4 stored" in m.stdout and "1 members: 1 stored" in m.stdout and "2 rounds" in m.stdout
+    mj = json.loads(slipchain_cli("status", "--store", tmp_path / "mm", "--json").stdout)
+    assert sorted(r["sweep"] for r in mj["rounds"]) == ["release", "round-2"] and mj["driver"].startswith("no driver")
     (tmp_path / "empty").mkdir()
-    for bad, says in ((tmp_path / "none", "no such directory"), (tmp_path / "empty", "not a slipchain sweep store")):
+    for bad, says in ((tmp_path / "none", "no such directory"), (tmp_path / "empty", "neither a slipchain sweep store")):
         b = slipchain_cli("status", "--store", bad)
-        assert b.returncode == 2 and "--store" in b.stderr and says in b.stderr and str(bad) in b.stderr, b.stderr
+        assert b.returncode == 2 and "--store" in b.stderr and says in b.stderr.replace("\n", " ") and str(bad) in b.stderr, b.stderr
     assert sorted(p.name for p in (tmp_path / "empty").iterdir()) == []  # nothing written

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 from typing import Annotated, Optional
@@ -86,21 +87,44 @@ def presets() -> None:
 
 
 def status(
-    store: Annotated[Path, typer.Option("--store", help="A sweep store (slipchain sweep --store): safe to read while "
-                                        "its sweep runs.")],
-    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object instead of the table.")] = False,
+    store: Annotated[Path, typer.Option("--store", help="A sweep store (slipchain sweep --store), or a mu-max output "
+                                        "directory (slipchain mu-max --out: each of its rounds); safe to read while it runs.")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object instead of the tables.")] = False,
 ) -> None:
     """Where a sweep store stands: each member stored (and what it found), in flight (how far its checkpoint has got,
-    at what wall time), failed or pending, and whether a driver runs it now. Reads only; starts nothing."""
-    from ..sweeps.status import IN_FLIGHT, store_status
+    at what wall time, how fast it moves now), failed or pending, and whether a driver runs it now. Reads only."""
+    from ..sweeps.status import driver_status, store_status
+    from ..workflows.dead_weight import ROUNDS
 
+    rounds = store / ROUNDS
+    if store.is_dir() and not (store / "sweep.toml").is_file() and not rounds.is_dir():
+        fail(f"--store {str(store)!r}: neither a slipchain sweep store (no sweep.toml in it) nor a mu-max output "
+             f"directory (no {ROUNDS}/ in it); expected a directory written by slipchain sweep or slipchain mu-max")
     try:
-        st = store_status(store)
+        if (store / "sweep.toml").is_file() or not rounds.is_dir():
+            found = [store_status(store)]
+        else:  # a mu-max bisection: one store per round, in the order they were made
+            found = [store_status(p) for p in sorted((q for q in rounds.iterdir() if (q / "sweep.toml").is_file()),
+                                                     key=lambda q: ((q / "sweep.toml").stat().st_mtime, q.name))]
     except SweepError as e:
         fail(str(e))
     if as_json:
-        sys.stdout.write(st.to_json() + "\n")
+        if len(found) == 1 and not rounds.is_dir():
+            sys.stdout.write(found[0].to_json() + "\n")
+        else:
+            sys.stdout.write(json.dumps({"path": str(store), "driver": driver_status(store),
+                                         "rounds": [json.loads(f.to_json()) for f in found]}, indent=1) + "\n")
         return
+    for st in found:
+        _print_status(st)
+    if rounds.is_dir():
+        out.print(f"mu-max output {str(store)!r}: {len(found)} rounds. Bisection driver: {driver_status(store)}.",
+                  markup=False, highlight=False, soft_wrap=True)
+
+
+def _print_status(st) -> None:
+    from ..sweeps.status import IN_FLIGHT
+
     table = Table(title=f"slipchain status: {st.path} (sweep {st.sweep!r})")
     for col in ("member", "state", "t / t_max (s)", "wall (s)", "wall/sim", "outcome, message"):
         table.add_column(col, overflow="fold", justify="right" if col.startswith(("t ", "wall")) else "left")

@@ -106,7 +106,7 @@ def store_status(path: str | os.PathLike) -> StoreStatus:
             flying[by_config[r.config].id] = (r, attrs)
     done, failed = st.completed_ids(), st.failed_ids()
     members = [_member_status(st, m, m.id in done, m.id in failed, flying.get(m.id)) for m in st.sweep.members]
-    return StoreStatus(str(path), st.sweep.name, members, _driver(path), stray, unreadable)
+    return StoreStatus(str(path), st.sweep.name, members, driver_status(path), stray, unreadable)
 
 
 def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> MemberStatus:
@@ -136,9 +136,10 @@ def _float(v: Any) -> float | None:
         return None
 
 
-def _driver(path: Path) -> str:
-    """Who runs the store now, from driver.json (present while a driver runs, or after one was killed)."""
-    record = path / HOLDER
+def driver_status(path: str | os.PathLike) -> str:
+    """Who runs the folder now (a sweep store, or a mu-max output directory: both hold their driver's
+    record), in words, from driver.json (present while a driver runs, or after one was killed)."""
+    record = Path(path) / HOLDER
     if not record.exists():
         return "no driver (none is running it)"
     try:
@@ -158,4 +159,5 @@ def _driver(path: Path) -> str:
     return f"running ({who})"
 
 
-__all__ = ["FAILED", "IN_FLIGHT", "PENDING", "STORED", "UNREADABLE", "MemberStatus", "StoreStatus", "store_status"]
+__all__ = ["FAILED", "IN_FLIGHT", "PENDING", "STORED", "UNREADABLE", "MemberStatus", "StoreStatus", "driver_status",
+           "store_status"]
