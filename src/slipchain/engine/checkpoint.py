@@ -256,6 +256,17 @@ class CheckpointRow:
 RECENT_WINDOW = 0.01  # s: the stretch of the record over which checkpoint_rows reads the upper layer's velocity
 
 
+def _recent_velocity(ds: xr.Dataset, r: int, config: str) -> float:
+    """d<X>/dt of row ``r`` over its record's last RECENT_WINDOW s (nan where the record cannot say)."""
+    try:
+        interval = float(tomllib.loads(config)["output_interval"])  # the samples' spacing (s)
+        k = max(1, int(round(RECENT_WINDOW / interval)))
+        tail = np.asarray(ds[f"rec_samples_{r}"][-(k + 1):, S.O_XUMEAN].values, dtype=float)
+    except (KeyError, ValueError, TypeError, IndexError, tomllib.TOMLDecodeError):
+        return float("nan")
+    return float((tail[-1] - tail[0]) / ((tail.size - 1) * interval)) if tail.size >= 2 else float("nan")
+
+
 def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
     """The attributes of a checkpoint (wall_time_s, t_simulated, written, ...) and one
     :class:`CheckpointRow` per run in it, reading only those variables and the last samples of each
@@ -271,13 +282,7 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
         with xr.open_dataset(path, engine=ENGINE) as ds:
             attrs = dict(ds.attrs)
             cols = [np.atleast_1d(ds[v].values) for v in ("config", "samples_done", "row_status", "row_message", "active")]
-            recent = []
-            for r, text in enumerate(cols[0]):
-                rec = ds[f"rec_samples_{r}"]
-                interval = float(tomllib.loads(str(text))["output_interval"])  # the samples' spacing (s)
-                k = max(1, int(round(RECENT_WINDOW / interval)))
-                tail = np.asarray(rec[-(k + 1):, S.O_XUMEAN].values, dtype=float)
-                recent.append((tail[-1] - tail[0]) / ((tail.size - 1) * interval) if tail.size >= 2 else np.nan)
+            recent = [_recent_velocity(ds, r, str(text)) for r, text in enumerate(cols[0])]
     except Exception as e:  # noqa: BLE001 - h5py's OSError, xarray's ValueError, a KeyError: not a whole checkpoint
         raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
     rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a), float(v))
