@@ -94,18 +94,19 @@ def status(
     """Where a sweep store stands: each member stored (and what it found), in flight (how far its checkpoint has got,
     at what wall time, how fast it moves now), failed or pending, and whether a driver runs it now. Reads only."""
     from ..sweeps.status import driver_status, store_status
+    from ..sweeps.store import DEFINITION
     from ..workflows.dead_weight import ROUNDS
 
     rounds = store / ROUNDS
-    if store.is_dir() and not (store / "sweep.toml").is_file() and not rounds.is_dir():
-        fail(f"--store {str(store)!r}: neither a slipchain sweep store (no sweep.toml in it) nor a mu-max output "
+    if store.is_dir() and not (store / DEFINITION).is_file() and not rounds.is_dir():
+        fail(f"--store {str(store)!r}: neither a slipchain sweep store (no {DEFINITION} in it) nor a mu-max output "
              f"directory (no {ROUNDS}/ in it); expected a directory written by slipchain sweep or slipchain mu-max")
     try:
-        if (store / "sweep.toml").is_file() or not rounds.is_dir():
+        if (store / DEFINITION).is_file() or not rounds.is_dir():
             found = [store_status(store)]
         else:  # a mu-max bisection: one store per round, in the order they were made
-            found = [store_status(p) for p in sorted((q for q in rounds.iterdir() if (q / "sweep.toml").is_file()),
-                                                     key=lambda q: ((q / "sweep.toml").stat().st_mtime, q.name))]
+            found = [store_status(p) for p in sorted((q for q in rounds.iterdir() if (q / DEFINITION).is_file()),
+                                                     key=lambda q: ((q / DEFINITION).stat().st_mtime, q.name))]
     except SweepError as e:
         fail(str(e))
     if as_json:
@@ -113,7 +114,7 @@ def status(
             sys.stdout.write(found[0].to_json() + "\n")
         else:
             sys.stdout.write(json.dumps({"path": str(store), "driver": driver_status(store),
-                                         "rounds": [json.loads(f.to_json()) for f in found]}, indent=1) + "\n")
+                                         "rounds": [f.to_dict() for f in found]}, indent=1, default=str) + "\n")
         return
     for st in found:
         _print_status(st)

@@ -29,7 +29,7 @@ from typing import Any
 from ..engine.checkpoint import CheckpointError, checkpoint_rows
 from ..results.schema import Status
 from .definition import Member, SweepError
-from .store import CHECKPOINTS, DEFINITION, HOLDER, Store
+from .store import CHECKPOINTS, HOLDER, Store, holder_text, read_holder
 
 STORED, FAILED, IN_FLIGHT, PENDING, UNREADABLE = "stored", "failed", "in flight", "pending", "unreadable"
 
@@ -68,8 +68,11 @@ class StoreStatus:
             out[m.state] += 1
         return out
 
+    def to_dict(self) -> dict[str, Any]:
+        return {**asdict(self), "counts": self.counts()}
+
     def to_json(self) -> str:
-        return json.dumps({**asdict(self), "counts": self.counts()}, indent=1, default=str)
+        return json.dumps(self.to_dict(), indent=1, default=str)
 
 
 def store_status(path: str | os.PathLike) -> StoreStatus:
@@ -81,13 +84,10 @@ def store_status(path: str | os.PathLike) -> StoreStatus:
     if not path.is_dir():
         raise SweepError(f"--store {str(path)!r}: no such directory; expected a slipchain sweep store "
                          "(a directory with sweep.toml, written by slipchain sweep)")
-    if not (path / DEFINITION).is_file():
-        raise SweepError(f"--store {str(path)!r}: not a slipchain sweep store (no {DEFINITION} in it); expected a "
-                         "directory written by slipchain sweep")
     try:
-        st = Store.open(path)
-    except SweepError as e:  # a sweep.toml that cannot be read
-        raise SweepError(f"--store {str(path)!r}: {e}") from None
+        st = Store.open(path)  # refuses a directory without sweep.toml, or one it cannot read
+    except SweepError as e:
+        raise SweepError(f"--store: {e}") from None
     by_config = {m.config.to_toml(): m for m in st.sweep.members}
     flying: dict[str, tuple[Any, dict]] = {}
     stray, unreadable = [], []
@@ -142,12 +142,11 @@ def driver_status(path: str | os.PathLike) -> str:
     record = Path(path) / HOLDER
     if not record.exists():
         return "no driver (none is running it)"
-    try:
-        h = json.loads(record.read_text())
-        host, pid, started = str(h["host"]), int(h["pid"]), str(h["started"])
-    except (OSError, ValueError, KeyError, TypeError):
+    holder = read_holder(record)
+    if holder is None:
         return "a driver is starting (its record is not complete yet)"
-    who = f"host {host}, pid {pid}, started {started}"
+    host, pid, _ = holder
+    who = holder_text(holder)
     if host != socket.gethostname():
         return f"recorded driver on another host ({who}): running unless it was killed there"
     try:

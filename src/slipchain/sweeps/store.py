@@ -393,12 +393,23 @@ def driver_lock(folder: str | os.PathLike, what: str = "store") -> Iterator[str 
         lock.release()
 
 
-def _holder_text(record: Path) -> str:
+def read_holder(record: Path) -> tuple[str, int, str] | None:
+    """The driver record ``driver.json`` as (host, pid, started); None if absent or not complete yet."""
     try:
         h = json.loads(record.read_text())
-        return f"host {h['host']}, pid {h['pid']}, started {h['started']}"
+        return str(h["host"]), int(h["pid"]), str(h["started"])
     except (OSError, ValueError, KeyError, TypeError):
-        return "holder not recorded yet"
+        return None
+
+
+def holder_text(holder: tuple[str, int, str]) -> str:
+    host, pid, started = holder
+    return f"host {host}, pid {pid}, started {started}"
+
+
+def _holder_text(record: Path) -> str:
+    holder = read_holder(record)
+    return "holder not recorded yet" if holder is None else holder_text(holder)
 
 
 def _member_files(folder: Path) -> list[Path]:
