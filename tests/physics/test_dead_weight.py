@@ -138,3 +138,95 @@ def test_stop_at_runaway_ends_the_run_soon_after_the_onset_with_the_same_record(
             make_config(**ident, dead_weight=0.5, **bad, stop_at_runaway=True)  # no decision, no ramp, a release
     assert member_id(make_config(**cfg)) == member_id(make_config(**cfg, stop_at_runaway=False))
     assert "stop_at_runaway" not in make_config(**cfg).to_toml()
+
+
+# A released slab (issue 29's tester, shrunk): a light rigid top (T = 2.49 ms) on a 4 x 4 interface, identical
+# contacts at the physical stiffness; the weight hangs at once (t_ramp 10 us)
+RELEASE = dict(geometry="slab", N=4, Ly=4, N_L=50, theta=1.0, delta=0.0, epsilon=1.0, start="rest", top_mass=1e-6,
+               eta_c=1e5, t_ramp=1e-5, t_decide=0.02, t_max=0.03, output_interval=2e-5)
+
+
+def test_the_top_rings_with_the_period_of_its_mass_on_the_layers_shear():
+    """model.system.top_ringing_period, T = 2 pi sqrt(M / (a**2 G/H)), against the released top's own ringing
+    while the interface holds (a light weight: the top's velocity peaks, damped, come every T), within 2 %
+    (the output interval is 0.8 % of T); and None where there is no rigid top."""
+    from scipy.signal import find_peaks
+
+    from slipchain.model.system import top_ringing_period
+
+    cfg = make_config(**RELEASE, dead_weight=0.3)
+    T = top_ringing_period(cfg)
+    assert T == pytest.approx(2 * np.pi * np.sqrt((50 * cfg.m + 1e-6) / (cfg.a * cfg.G / 50)), rel=1e-12)
+    ds = run(cfg)
+    t, X = ds.time.values, ds.X_mean.values
+    peaks, _ = find_peaks(np.gradient(X, t))
+    assert len(peaks) >= 5
+    assert np.diff(t[peaks][:5]) == pytest.approx(np.full(4, T), rel=0.02)
+    assert top_ringing_period(make_config(N=11, dead_weight=0.5, t_total=0.01)) is None
+    assert top_ringing_period(make_config(geometry="slab", N=4, Ly=4)) is None
+
+
+def test_a_released_runaway_is_read_over_the_tops_last_two_ringing_periods():
+    """certain_runaway for a release on the slab's top (results.schema._released_runaway) on records of exact
+    velocities: ringing far beyond the branch about a mean that falls, never; a mean velocity beyond the branch
+    (0.01 m/s) rising from period to period, from RING_START = 3 periods after the ramp, not before; an
+    overshoot from rest that peaks at 2 T and comes back, not (a check from 2 T would have called it a runaway:
+    why the first period is left out)."""
+    from slipchain.model.system import RING_START, top_ringing_period
+    from slipchain.results.schema import certain_runaway, runaway_window
+
+    cfg = make_config(**RELEASE, dead_weight=0.9, stop_at_runaway=True)
+    T = top_ringing_period(cfg)
+    assert runaway_window(cfg) == 2 * T and RING_START == 3
+    dt = 1e-6
+    t = np.arange(1, int(round(6 * T / dt)) + 1) * dt
+
+    def verdict(v, upto):
+        n = int(np.searchsorted(t, upto))
+        return certain_runaway(cfg, t[:n], np.cumsum(v * dt)[:n])
+
+    ring = 0.5 * np.sin(2 * np.pi * t / T)  # +-0.5 m/s, fifty times the branch's bound
+    for upto in np.linspace(2 * T, 6 * T, 9):
+        assert verdict(ring + 0.02 * np.exp(-t / T), upto) is None  # ringing about a falling mean
+        assert verdict(ring + 0.002 * t / T, upto) is None  # a rising mean, below the bound over the period before
+    rising = ring + 0.02 * t / T  # the mean beyond the branch, and rising
+    assert verdict(rising, 2.9 * T) is None and "ringing periods" in verdict(rising, 3.05 * T)
+    overshoot = np.where(t < 2 * T, 0.05 * t / T, 0.1 * np.exp(-(t - 2 * T) / (0.1 * T)))
+    assert all(verdict(overshoot, upto) is None for upto in np.linspace(3 * T, 6 * T, 7))
+    slow = make_config(N=11, theta=1.0, delta=0.0, dead_weight=1.0, t_ramp=0.15, t_decide=0.2, t_max=0.3,
+                       stop_at_runaway=True)
+    assert runaway_window(slow) == 0.02  # a slowly loaded run keeps the 20-ms halves
+
+
+def test_stop_at_runaway_stops_a_released_slab_as_its_replay_does(tmp_path, store_of_runs):
+    """The released 4 x 4 slab (RELEASE) below and above the contacts' maximum: with stop_at_runaway the runaway
+    stops at the first chunk end from 3 T on (7.52 ms here, where the decision at t_decide took 20 ms),
+    classified runaway, its record the full run's up to there bit for bit; the held run (ringing through
+    zero at several m/s) runs on as without it. The replay of the full runs' stored records with
+    stop_at_runaway (analysis.traces.redecide) stops each where the run stopped and says what it said. A
+    release on the chains stays refused."""
+    from slipchain.analysis.traces import redecide
+    from slipchain.model.system import top_ringing_period
+    from slipchain.sweeps.definition import make_sweep
+
+    sweep = make_sweep({"name": "release", "base": {**RELEASE, "dead_weight": 0.3}, "grid": {"dead_weight": [0.3, 0.9]}})
+    store_of_runs(tmp_path / "s", sweep)
+    replay, _ = redecide([tmp_path / "s"], [RELEASE["t_decide"]], stop_at_runaway=True)
+    T = top_ringing_period(make_config(**RELEASE, dead_weight=0.9))
+    for m in sweep.members:
+        full = run(m.config)
+        short = run(m.config.model_copy(update={"stop_at_runaway": True}))
+        n = short.time.size
+        for v in ("X_mean", "x_mean", "f_d"):
+            assert np.array_equal(full[v].values[:n], short[v].values), v
+        row = replay[replay["member_id"] == m.id].iloc[0]
+        assert row["stop_at_runaway"] and row["status_replay"] == short.attrs["velocity_status"]
+        assert row["t_stop"] == pytest.approx(float(short.time.values[-1]), abs=1e-9)
+        if m.config.dead_weight == 0.9:
+            assert full.attrs["velocity_status"] == short.attrs["velocity_status"] == "runaway"
+            assert "ringing periods" in short.attrs["velocity_reason"]
+            assert 3 * T <= short.time.values[-1] < 3 * T + 0.001 and full.time.values[-1] >= RELEASE["t_decide"]
+        else:
+            assert short.attrs["velocity_status"] == full.attrs["velocity_status"] != "runaway" and n == full.time.size
+    with pytest.raises(Exception, match="stop_at_runaway.*geometry = 'slab'"):
+        make_config(N=11, dead_weight=0.5, t_ramp=1e-3, t_decide=0.11, t_max=0.2, stop_at_runaway=True)

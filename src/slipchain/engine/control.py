@@ -21,8 +21,8 @@ from ..model.config import Config
 from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import count_cycles, steady_estimate, window_velocity
-from ..results.schema import (RUNAWAY_WINDOW, Status, accelerating_beyond_branch, after_ramp, certain_runaway,
-                              dead_weight_velocity, velocity_decided)
+from ..results.schema import (Status, accelerating_beyond_branch, after_ramp, certain_runaway,
+                              dead_weight_velocity, runaway_window, velocity_decided)
 from . import scheme as S
 
 DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace each time it has grown by 2 %
@@ -194,8 +194,9 @@ class UntilDecided:
         return self.reached
 
     def _runaway(self, n_done: int) -> bool:
-        """certain_runaway on the record's last RUNAWAY_WINDOW (the chunks that hold it, from the end)."""
-        need = int(np.ceil(RUNAWAY_WINDOW / self.interval)) + 1
+        """certain_runaway on the record's last runaway_window (the chunks that hold it, from the end; a
+        released run's two ringing periods)."""
+        need = int(np.ceil(runaway_window(self.config) / self.interval)) + 1
         parts, have = [], 0
         for part in reversed(self.X_mean):
             parts.append(part)

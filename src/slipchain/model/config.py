@@ -66,9 +66,10 @@ ALLOWED: dict[str, str] = {
                     "t_max, absent with t_total or dead_weight",
     "t_decide": "a number > 0 (s), less than t_max, only with dead_weight and without t_total; or absent",
     "t_ramp": "a number > 0 (s), only with dead_weight, shorter than t_decide (else than the run); or absent",
-    "stop_at_runaway": "true or false (only with dead_weight, t_decide and t_ramp >= t_decide/2: stop before "
-                       "t_decide once the slider has run away for good, its velocity over each half of the last 20 ms "
-                       "beyond 10 v0 10**delta and rising)",
+    "stop_at_runaway": "true or false (only with dead_weight, t_decide and t_ramp >= t_decide/2, or with dead_weight, "
+                       "t_decide and geometry = 'slab' for a release: stop before t_decide once the slider has run "
+                       "away for good, its velocity over each half of the last 20 ms, or over each of the slab top's "
+                       "last two ringing periods from three after the ramp, beyond 10 v0 10**delta and rising)",
     "sem_target": "a number > 0",
     "output_interval": "a number > 0 (s), at least dt",
     "seed": "an integer >= 0",
@@ -164,12 +165,14 @@ class Config(BaseModel):
     (:meth:`slipchain.engine.backends.implicit.SlabSystem.precondition`,
     :meth:`slipchain.engine.backends.implicit.LatticeSystem.precondition`);
     ``stop_at_runaway`` (dead weight with ``t_decide`` and a ramp ``t_ramp`` of at least half of it: a
-    slowly loaded run; with the weight at once or released within a few of the tester top's ringing
-    periods the top overshoots to 0.03-0.15 m/s and comes back, docs/tester-3d): the run stops before ``t_decide`` once the
-    slider has run away for good (:func:`slipchain.results.schema.certain_runaway`: the top's velocity over
-    each half of the last 20 ms beyond RUNAWAY_FACTOR v0 10**delta and rising), classified ``runaway``; for runs that
-    read mu_max where the block runs away as the weight rises (the runaway after it costs most of such a
-    run and tells nothing more);
+    slowly loaded run; or on the slab, released: with the weight at once or released within a few of the
+    tester top's ringing periods the top overshoots to 0.03-0.15 m/s and comes back, docs/tester-3d): the run
+    stops before ``t_decide`` once the slider has run away for good
+    (:func:`slipchain.results.schema.certain_runaway`: the top's velocity over each half of the last 20 ms,
+    or, released, over each of the top's last two ringing periods from three periods after the ramp on,
+    beyond RUNAWAY_FACTOR v0 10**delta and rising), classified ``runaway``; for runs that read mu_max where
+    the block runs away as the weight rises, or bracket it where a released block runs away (the runaway
+    after it costs most of such a run and tells nothing more);
     ``energy_tol`` (integrator = 'implicit'): a backward-Euler step is accepted only if its energy
     residual (its numerical dissipation) is at most this fraction of the magnitudes of its works, and
     the step doubles only below half of it (default ENERGY_TOL = 1e-4, the value before it was a key;
@@ -316,12 +319,13 @@ class Config(BaseModel):
         if self.integrator not in ("adaptive", "implicit") and self.step_tol != OFF["step_tol"]:
             raise ValueError(_message("step_tol", self.step_tol, "absent unless integrator = 'adaptive' or 'implicit' "
                                       "(it is the adaptive step's tolerance)"))
-        if self.stop_at_runaway and (self.dead_weight is None or self.t_decide is None or self.t_ramp is None
-                                     or self.t_ramp < 0.5 * self.t_decide):
+        if self.stop_at_runaway and (self.dead_weight is None or self.t_decide is None or (
+                (self.t_ramp is None or self.t_ramp < 0.5 * self.t_decide) and self.geometry != "slab")):
             raise ValueError(_message("stop_at_runaway", self.stop_at_runaway, "absent (or false) unless dead_weight "
                                       "and t_decide are given with a ramp t_ramp of at least half of t_decide (a slowly "
-                                      "loaded run, read where it runs away; released faster, the tester's heavy top "
-                                      "overshoots beyond the rising branch and comes back, which would stop it)"))
+                                      "loaded run, read where it runs away) or with geometry = 'slab' (a release of "
+                                      "the slab's rigid top, read over its ringing periods; released faster, any other "
+                                      "slider's top overshoots beyond the rising branch and comes back, which would stop it)"))
         if self.integrator != "implicit" and self.energy_tol != OFF["energy_tol"]:
             raise ValueError(_message("energy_tol", self.energy_tol, "absent unless integrator = 'implicit' (it bounds "
                                       f"the backward-Euler steps' numerical dissipation; here integrator = '{self.integrator}')"))

@@ -87,6 +87,22 @@ def dead_weight_ramp_time(cfg: Config) -> float | None:
     return DEAD_WEIGHT_RAMP * cfg.t_decide if cfg.t_decide is not None else None
 
 
+RING_START = 3  # top_ringing_period: a released run's certain-runaway check starts this many periods after the ramp
+
+
+def top_ringing_period(cfg: Config) -> float | None:
+    """T = 2 pi sqrt(M / (a**2 k(0))) (s): the period with which the slab's rigid top under the dead weight
+    rings on the layer's shear while the interface holds (issue 29's tester: M the top's mass per interface
+    block, :attr:`Config.upper_mass`; k(0) = G/H the uniform mode's stiffness per area,
+    :func:`~slipchain.model.elastic.uniform_stiffness`, with the relaxed modulus: a rubber stiffer at the
+    ringing frequency rings faster, so this is the longest period). 0.06 s at theta = 0.05 and 0.26 s at
+    theta = 1 on the tester's block (H = 50 a, p_theta1 = 6.5 MPa), as the stored release runs ring
+    (docs/tester-3d). None where there is no such top (the chains, the half-space, the spring drive)."""
+    if cfg.dead_weight is None or cfg.geometry != "slab":
+        return None
+    return 2.0 * np.pi * float(np.sqrt(cfg.upper_mass / (cfg.a**2 * uniform_stiffness(cfg))))
+
+
 def dead_weight_force(system: System) -> float:
     """F_b = mu_a*epsilon*f0*theta (theta = N_c/N realised): the hanging weight's share per upper
     block in the dead-weight drive (``config.dead_weight`` = mu_a); 0 with the spring drive."""

@@ -19,7 +19,8 @@ import numpy as np
 import xarray as xr
 
 from .._version import __version__
-from ..model.system import DEAD_WEIGHT_RAMP, State, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
+from ..model.system import (DEAD_WEIGHT_RAMP, RING_START, State, System, dead_weight_force, dead_weight_ramp_time,
+                            mu_star_norm, top_ringing_period)
 from .checks import CheckResult, arm_energy, displacement_check, energy_check, stored_energy
 from .observables import SLOW_FRACTION, steady_estimate, window_velocity
 from .velocity import REL_TOL, VelocityFit, VelocityStatus, steady_velocity
@@ -330,16 +331,66 @@ def dead_weight_velocity(cfg, time: np.ndarray, X_mean: np.ndarray) -> tuple[str
 RUNAWAY_WINDOW = 0.02  # s: config stop_at_runaway reads the top's velocity over this last stretch of the record
 
 
+def slowly_loaded(cfg) -> bool:
+    """A dead-weight run with ``t_decide`` whose weight rises over at least half of it (``t_ramp``): read where
+    it runs away as the weight rises. Anything faster is a release, after which the tester's heavy top
+    overshoots and rings (docs/tester-3d)."""
+    return cfg.t_decide is not None and cfg.t_ramp is not None and cfg.t_ramp >= 0.5 * cfg.t_decide
+
+
+def runaway_window(cfg) -> float:
+    """The stretch at the record's end that :func:`certain_runaway` reads (s): RUNAWAY_WINDOW for a slowly
+    loaded run, two of the top's ringing periods for a release (:func:`~slipchain.model.system.top_ringing_period`)."""
+    period = None if slowly_loaded(cfg) else top_ringing_period(cfg)
+    return RUNAWAY_WINDOW if period is None else 2.0 * period
+
+
+def _released_runaway(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
+    """:func:`certain_runaway` for a released run on the slab's rigid top (issue 29's tester, the weight hanging
+    at once or let go fast). The top rings on the rubber's shear with the period T of
+    :func:`~slipchain.model.system.top_ringing_period`, through zero and far beyond the rising branch, so a
+    short stretch cannot tell a runaway from an overshoot that comes back. Over a whole period the ringing
+    cancels and the top's mean velocity is the interface's mean slip velocity (the layer's shear swings, it
+    does not grow): a top whose mean velocity over each of the last two periods is beyond the rising branch
+    (faster than RUNAWAY_FACTOR*v0*10**delta) and over the last faster than over the one before slides,
+    on average, where eq. (1)'s forces fall with velocity below a load that no longer grows, and cannot
+    come back. The first period after the ramp holds the release's own rise from rest (its mean velocity
+    rises by construction), so the check starts at RING_START = 3 periods after the ramp: the two windows
+    are the second and third periods. Measured on the 82 stored release runs (16 x 16 to 128 x 128, three
+    seeds, 20 and 11 deg C, eta_c 0.1 and 1 omega0; docs/tester-3d "Stopping a released runaway"): every
+    held or steady run fails the test from 2.04 T on, every runaway passes it from 2.67 T on, and
+    ``slipchain figure traces --redecide T --stop-at-runaway`` replays the rule on a store."""
+    period = top_ringing_period(cfg)
+    ramp = dead_weight_ramp_time(cfg) or 0.0
+    t = time[-1]
+    if period is None or t < ramp + RING_START * period * (1.0 - 1e-9):
+        return None
+    i0, i1 = np.searchsorted(time, (t - 2.0 * period * (1.0 + 1e-9), t - period * (1.0 + 1e-9)))
+    if i1 <= i0 or i1 >= time.size - 1:
+        return None
+    v1 = (X_mean[i1] - X_mean[i0]) / (time[i1] - time[i0])
+    v2 = (X_mean[-1] - X_mean[i1]) / (t - time[i1])
+    v_branch = _beyond_branch(cfg)
+    if not (v1 > v_branch and v2 > v1):
+        return None
+    return (f"runaway: by t = {t:.6g} s the released top slid at {v1:.3g} and then {v2:.3g} m/s over its last two "
+            f"ringing periods ({period:.3g} s each; > {RUNAWAY_FACTOR:g} v0 10**delta = {v_branch:.3g} m/s, and faster), "
+            "beyond the maximum of mu(v) under a load that no longer grows: stopped there (stop_at_runaway)")
+
+
 def certain_runaway(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
     """Config ``stop_at_runaway``: whether the record's last RUNAWAY_WINDOW says the slider has run away
     for good before ``t_decide`` (while the weight still rises, or after), and why (None if it does not).
     The top's mean velocity over each half of that stretch is beyond the rising branch
     (faster than RUNAWAY_FACTOR*v0*10**delta, the bound :func:`accelerating_beyond_branch` uses) and
     over the second half faster than over the first: under a load that only grows or stays, such a slider cannot come back
-    (the argument of :func:`accelerating_beyond_branch`). ``time``, ``X_mean``: the record so far (only
-    its last RUNAWAY_WINDOW is read)."""
+    (the argument of :func:`accelerating_beyond_branch`). A released run (not :func:`slowly_loaded`) on the
+    slab's rigid top is read over its last two ringing periods instead (:func:`_released_runaway`).
+    ``time``, ``X_mean``: the record so far (only its last :func:`runaway_window` is read)."""
     if time.size < 3:
         return None
+    if not slowly_loaded(cfg):
+        return _released_runaway(cfg, time, X_mean)
     start = np.searchsorted(time, time[-1] - RUNAWAY_WINDOW * (1.0 + 1e-9))
     t, x = time[start:], X_mean[start:]
     if t.size < 3 or t[-1] - t[0] < 0.5 * RUNAWAY_WINDOW:
