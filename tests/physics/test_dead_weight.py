@@ -198,35 +198,46 @@ def test_a_released_runaway_is_read_over_the_tops_last_two_ringing_periods():
     assert runaway_window(slow) == 0.02  # a slowly loaded run keeps the 20-ms halves
 
 
-def test_stop_at_runaway_stops_a_released_slab_as_its_replay_does(tmp_path, store_of_runs):
-    """The released 4 x 4 slab (RELEASE) below and above the contacts' maximum: with stop_at_runaway the runaway
-    stops at the first chunk end from 3 T on (7.52 ms here, where the decision at t_decide took 20 ms),
-    classified runaway, its record the full run's up to there bit for bit; the held run (ringing through
-    zero at several m/s) runs on as without it. The replay of the full runs' stored records with
-    stop_at_runaway (analysis.traces.redecide) stops each where the run stopped and says what it said. A
-    release on the chains stays refused."""
+def test_a_released_slab_stops_at_its_runaway_or_once_held_as_its_replay_does(tmp_path, store_of_runs):
+    """The released 4 x 4 slab (RELEASE) below and above the contacts' maximum, with stop_at_runaway and
+    stop_when_held: the runaway stops at the first chunk end from 3 T on (7.52 ms here, where the decision at
+    t_decide took 20 ms), classified runaway by its ringing periods; the held run (ringing through zero at
+    several m/s first) stops at a decision from t_decide on, before t_max, once its top is back on the branch
+    (certain_held), classified no-steady, its last period's mean velocity on the branch. Each record is the full run's up to there, bit for bit.
+    The replay of the full runs' stored records with both configs on (analysis.traces.redecide) stops each
+    where the run stopped and says what it said. Both keys stay refused off the slab."""
     from slipchain.analysis.traces import redecide
     from slipchain.model.system import top_ringing_period
     from slipchain.sweeps.definition import make_sweep
 
     sweep = make_sweep({"name": "release", "base": {**RELEASE, "dead_weight": 0.3}, "grid": {"dead_weight": [0.3, 0.9]}})
     store_of_runs(tmp_path / "s", sweep)
-    replay, _ = redecide([tmp_path / "s"], [RELEASE["t_decide"]], stop_at_runaway=True)
+    replay, _ = redecide([tmp_path / "s"], [RELEASE["t_decide"]], stop_at_runaway=True, stop_when_held=True)
     T = top_ringing_period(make_config(**RELEASE, dead_weight=0.9))
     for m in sweep.members:
         full = run(m.config)
-        short = run(m.config.model_copy(update={"stop_at_runaway": True}))
+        short = run(m.config.model_copy(update={"stop_at_runaway": True, "stop_when_held": True}))
         n = short.time.size
         for v in ("X_mean", "x_mean", "f_d"):
             assert np.array_equal(full[v].values[:n], short[v].values), v
         row = replay[replay["member_id"] == m.id].iloc[0]
-        assert row["stop_at_runaway"] and row["status_replay"] == short.attrs["velocity_status"]
+        assert row["stop_at_runaway"] and row["stop_when_held"] and row["status_replay"] == short.attrs["velocity_status"]
         assert row["t_stop"] == pytest.approx(float(short.time.values[-1]), abs=1e-9)
+        t_end = short.time.values[-1]
         if m.config.dead_weight == 0.9:
             assert full.attrs["velocity_status"] == short.attrs["velocity_status"] == "runaway"
             assert "ringing periods" in short.attrs["velocity_reason"]
-            assert 3 * T <= short.time.values[-1] < 3 * T + 0.001 and full.time.values[-1] >= RELEASE["t_decide"]
+            assert 3 * T <= t_end < 3 * T + 0.001 and full.time.values[-1] >= RELEASE["t_decide"]
         else:
-            assert short.attrs["velocity_status"] == full.attrs["velocity_status"] != "runaway" and n == full.time.size
-    with pytest.raises(Exception, match="stop_at_runaway.*geometry = 'slab'"):
-        make_config(N=11, dead_weight=0.5, t_ramp=1e-3, t_decide=0.11, t_max=0.2, stop_at_runaway=True)
+            assert full.attrs["velocity_status"] == short.attrs["velocity_status"] == "no-steady"
+            assert "stop_when_held" in short.attrs["velocity_reason"] and full.time.values[-1] == pytest.approx(0.03)
+            assert RELEASE["t_decide"] - 1e-9 <= t_end < RELEASE["t_max"] - 1e-3
+            t, X = short.time.values, short.X_mean.values
+            j = int(np.searchsorted(t, t_end - T))
+            assert (X[-1] - X[j]) / (t_end - t[j]) < m.config.v0 * 10**m.config.delta  # the last period on the branch
+    for key in ("stop_at_runaway", "stop_when_held"):
+        with pytest.raises(Exception, match=f"{key}.*geometry = 'slab'"):
+            make_config(N=11, dead_weight=0.5, t_ramp=1e-3, t_decide=0.11, t_max=0.2, **{key: True})
+    cfg = make_config(**RELEASE, dead_weight=0.3)
+    assert member_id(cfg) == member_id(cfg.model_copy(update={"stop_when_held": False}))
+    assert "stop_when_held" not in cfg.to_toml()

@@ -266,7 +266,7 @@ SIDES = {"steady": "below", "held": "below", "runaway": "above", "undecided": "u
 
 
 def redecide(stores: list[str | os.PathLike], t_decides: list[float] | tuple[float, ...],
-             stop_at_runaway: bool = False) -> tuple[pd.DataFrame, dict[float, int]]:
+             stop_at_runaway: bool = False, stop_when_held: bool = False) -> tuple[pd.DataFrame, dict[float, int]]:
     """Every completed run of dead-weight stores that had the automatic length (config ``t_decide``),
     replayed as if its ``t_decide`` had been each of ``t_decides`` (the stores read once): its stored record <X>(t) fed in the run's compiled
     chunks (:func:`~slipchain.engine.control.chunk_samples`, a sample at a time while the weight rises) to the
@@ -280,10 +280,10 @@ def redecide(stores: list[str | os.PathLike], t_decides: list[float] | tuple[flo
     replay's ``t_stop``, ``status_replay``, ``outcome_replay``; ``agree``: both on the same side of mu_max,
     :data:`SIDES`; ``t_decide_replay``), and per replayed t_decide how many runs were skipped because their ramp
     does not end before it (a slowly loaded run: nothing to replay). Where every run of a protocol agrees, its sweeps with
-    ``t_decide`` would have bracketed mu_max alike and stopped the runaways earlier. ``stop_at_runaway``: replay
-    with that config on (a released run on the slab read over its top's ringing periods,
-    :func:`~slipchain.results.schema.certain_runaway`), where the runs may not have had it; column
-    ``stop_at_runaway`` says which.
+    ``t_decide`` would have bracketed mu_max alike and stopped the runaways earlier. ``stop_at_runaway``,
+    ``stop_when_held``: replay with that config on (a released run on the slab read over its top's ringing
+    periods, :func:`~slipchain.results.schema.certain_runaway`, :func:`~slipchain.results.schema.certain_held`),
+    where the runs may not have had it; columns of those names say which.
     ValueError for a ``t_decide`` that is not a positive number of seconds."""
     from ..model.system import dead_weight_ramp_time
 
@@ -302,20 +302,22 @@ def redecide(stores: list[str | os.PathLike], t_decides: list[float] | tuple[flo
             if not ramp < t_decide:
                 skipped[float(t_decide)] += 1
                 continue
-            row = _replay(cfg, time, x, float(t_decide), ramp, stop_at_runaway or cfg.stop_at_runaway)
+            row = _replay(cfg, time, x, float(t_decide), ramp, stop_at_runaway or cfg.stop_at_runaway,
+                          stop_when_held or cfg.stop_when_held)
             rows.append({"store": store, "member_id": mid, **row, "status": status, "outcome": out, "t_end": float(time[-1]),
                          "agree": SIDES[out] == SIDES[row["outcome_replay"]]})
     return pd.DataFrame(rows), skipped
 
 
-def _replay(cfg, time: np.ndarray, x: np.ndarray, t_decide: float, ramp: float, stop: bool = False) -> dict:
-    """:func:`redecide` for one stored record at one ``t_decide`` (``stop``: config ``stop_at_runaway``): the
-    identifying columns and the replay's."""
+def _replay(cfg, time: np.ndarray, x: np.ndarray, t_decide: float, ramp: float, stop: bool = False,
+            held: bool = False) -> dict:
+    """:func:`redecide` for one stored record at one ``t_decide`` (``stop``, ``held``: configs ``stop_at_runaway``,
+    ``stop_when_held``): the identifying columns and the replay's."""
     from ..engine.control import DeadWeightRamp, RowControl, UntilDecided, chunk_samples
     from ..engine.scheme import O_XUMEAN
     from ..results.schema import dead_weight_status
 
-    c = cfg.model_copy(update={"t_decide": t_decide, "t_ramp": ramp, "stop_at_runaway": stop})
+    c = cfg.model_copy(update={"t_decide": t_decide, "t_ramp": ramp, "stop_at_runaway": stop, "stop_when_held": held})
     interval = c.output_interval
     row = RowControl(limit=time.size, ramp=DeadWeightRamp(0.0, max(1, int(round(ramp / interval)))),
                      decide=UntilDecided(c, interval, max(1, int(round(t_decide / interval)))))
@@ -330,7 +332,7 @@ def _replay(cfg, time: np.ndarray, x: np.ndarray, t_decide: float, ramp: float, 
     out_r, _ = run_outcome(c, status_r, time[:n], x[:n])
     return {"N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c, "theta": cfg.theta, "seed": cfg.seed,
             "mu_a": cfg.dead_weight, "t_ramp": ramp, "t_decide": cfg.t_decide, "t_decide_replay": t_decide,
-            "stop_at_runaway": stop, "t_stop": float(time[n - 1]), "status_replay": status_r, "outcome_replay": out_r}
+            "stop_at_runaway": stop, "stop_when_held": held, "t_stop": float(time[n - 1]), "status_replay": status_r, "outcome_replay": out_r}
 
 
 def onset_summary(onsets: pd.DataFrame) -> pd.DataFrame:

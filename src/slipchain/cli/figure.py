@@ -180,6 +180,7 @@ def traces(
     window: Annotated[float, typer.Option("--window", help="Seconds over which each drawn velocity is the mean (the distance travelled over the window's length).")] = 0.02,
     redecide: Annotated[list[float], typer.Option("--redecide", help="Replay each run's automatic length as if its t_decide had been this many seconds (repeat it for several) and say whether each run's outcome stays on its side of mu_max (redecide.csv).")] = [],  # noqa: B006
     stop_at_runaway: Annotated[bool, typer.Option("--stop-at-runaway", help="With --redecide: replay with config stop_at_runaway on (a released runaway on the slab stopped over its top's last two ringing periods).")] = False,
+    stop_when_held: Annotated[bool, typer.Option("--stop-when-held", help="With --redecide: replay with config stop_when_held on (a released slab stopped once its top is back on the rising branch for good).")] = False,
 ) -> None:
     """The top's velocity against time per run, one panel per theta; mu_max from where slowly loaded runs run away, and each protocol's bracket from its steady, held and runaway weights; traces.csv, onsets.csv, mu_max.csv, brackets.csv (with --redecide, redecide.csv)."""
     if not window > 0:
@@ -187,10 +188,11 @@ def traces(
     bad = [t for t in redecide if not t > 0]
     if bad:
         fail(f"--redecide {bad[0]!r}: expected a positive number of seconds (e.g. 0.8)")
-    if stop_at_runaway and not redecide:
-        fail("--stop-at-runaway without --redecide: expected --redecide T (the t_decide to replay it at)")
+    for flag, on in (("--stop-at-runaway", stop_at_runaway), ("--stop-when-held", stop_when_held)):
+        if on and not redecide:
+            fail(f"{flag} without --redecide: expected --redecide T (the t_decide to replay it at)")
     try:
-        paths, lines = _figures().traces(store, out_dir, window, redecide, stop_at_runaway)
+        paths, lines = _figures().traces(store, out_dir, window, redecide, stop_at_runaway, stop_when_held)
     except SweepError as e:
         fail(str(e))
     wrote(paths)

@@ -21,8 +21,9 @@ from ..model.config import Config
 from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_weight_ramp_time, mu_star_norm
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import count_cycles, steady_estimate, window_velocity
-from ..results.schema import (Status, accelerating_beyond_branch, after_ramp, certain_runaway,
+from ..results.schema import (Status, accelerating_beyond_branch, after_ramp, certain_held, certain_runaway,
                               dead_weight_velocity, runaway_window, velocity_decided)
+from ..results.velocity import VelocityStatus
 from . import scheme as S
 
 DECIDE_EVERY = 0.02  # the dead-weight automatic length classifies the trace each time it has grown by 2 %
@@ -164,7 +165,9 @@ class UntilDecided:
     or slows down it goes on, at most ``t_max``; there a tester's ``ok`` that still drifts becomes ``no-steady``, with the
     drift in its reason, and an accelerating slider stays ``runaway``. It reads only the run's config and
     its record, so a stored record can be fed to it again with another ``t_decide``
-    (:func:`slipchain.analysis.traces.redecide`)."""
+    (:func:`slipchain.analysis.traces.redecide`). With config ``stop_when_held`` a decision also stops a
+    released slab whose top is back on the rising branch for good
+    (:func:`~slipchain.results.schema.certain_held`)."""
 
     config: Config
     interval: float
@@ -189,8 +192,9 @@ class UntilDecided:
         X = np.concatenate(self.X_mean)
         after = after_ramp(self.config, time)
         status, _, fit = dead_weight_velocity(self.config, time[after], X[after])
-        self.reached = velocity_decided(status, fit) or accelerating_beyond_branch(self.config, time[after], X[after],
-                                                                                  fit)
+        self.reached = (velocity_decided(status, fit) or accelerating_beyond_branch(self.config, time[after], X[after], fit)
+                        or bool(self.config.stop_when_held and status != VelocityStatus.RUNAWAY
+                                and certain_held(self.config, time, X)))
         return self.reached
 
     def _runaway(self, n_done: int) -> bool:

@@ -70,6 +70,9 @@ ALLOWED: dict[str, str] = {
                        "t_decide and geometry = 'slab' for a release: stop before t_decide once the slider has run "
                        "away for good, its velocity over each half of the last 20 ms, or over each of the slab top's "
                        "last two ringing periods from three after the ramp, beyond 10 v0 10**delta and rising)",
+    "stop_when_held": "true or false (only with dead_weight, t_decide and geometry = 'slab': from t_decide on, and "
+                      "three of the slab top's ringing periods after the ramp, stop once the top's mean velocity over "
+                      "each of its last two ringing periods is below v0 10**delta, the rising branch's top, and falls)",
     "sem_target": "a number > 0",
     "output_interval": "a number > 0 (s), at least dt",
     "seed": "an integer >= 0",
@@ -103,11 +106,12 @@ LEGACY_KEYS: dict[str, str] = {
 # krylov_preconditioner: 'jacobi', the implicit stepper's only preconditioner on the slab before it existed.
 # energy_tol: ENERGY_TOL, the implicit stepper's fixed energy tolerance before it was a key.
 # stop_at_runaway: False, a dead-weight run went on to t_decide before it existed.
+# stop_when_held: False, a held dead-weight run went on to t_max before it existed.
 # implicit_scheme: 'backward-euler', the implicit stepper's only step above the explicit levels before it existed.
 ENERGY_TOL = 1e-4
 OFF: dict[str, Any] = {"geometry": "chain", "Ly": 1, "integrator": "fixed", "step_tol": 0.01, "min_cycles": 0,
                        "t_max_cycles": 0.0, "material": "elastic", "krylov_preconditioner": "jacobi",
-                       "energy_tol": ENERGY_TOL, "stop_at_runaway": False,
+                       "energy_tol": ENERGY_TOL, "stop_at_runaway": False, "stop_when_held": False,
                        "implicit_scheme": "backward-euler"}
 _NOT_OFF = object()
 
@@ -173,6 +177,11 @@ class Config(BaseModel):
     beyond RUNAWAY_FACTOR v0 10**delta and rising), classified ``runaway``; for runs that read mu_max where
     the block runs away as the weight rises, or bracket it where a released block runs away (the runaway
     after it costs most of such a run and tells nothing more);
+    ``stop_when_held`` (dead weight with ``t_decide`` on the slab): the run stops at a decision from
+    ``t_decide`` on once the released top is back on the rising branch for good
+    (:func:`slipchain.results.schema.certain_held`: its mean velocity over each of its last two ringing
+    periods below v0 10**delta and falling), instead of going on to ``t_max`` while it creeps or rings;
+    for runs that bracket mu_max (the tester's ringing top at theta = 1 costs most of such a run);
     ``energy_tol`` (integrator = 'implicit'): a backward-Euler step is accepted only if its energy
     residual (its numerical dissipation) is at most this fraction of the magnitudes of its works, and
     the step doubles only below half of it (default ENERGY_TOL = 1e-4, the value before it was a key;
@@ -233,6 +242,7 @@ class Config(BaseModel):
     t_max_cycles: float = Field(DEFAULT_T_MAX_CYCLES, ge=0)  # absent from the input: see _default_step
     t_decide: float | None = Field(None, gt=0)
     stop_at_runaway: bool = False
+    stop_when_held: bool = False
     t_ramp: float | None = Field(None, gt=0)
     sem_target: float = Field(0.01, gt=0)
     output_interval: float = Field(1e-5, gt=0)
@@ -326,6 +336,10 @@ class Config(BaseModel):
                                       "loaded run, read where it runs away) or with geometry = 'slab' (a release of "
                                       "the slab's rigid top, read over its ringing periods; released faster, any other "
                                       "slider's top overshoots beyond the rising branch and comes back, which would stop it)"))
+        if self.stop_when_held and (self.dead_weight is None or self.t_decide is None or self.geometry != "slab"):
+            raise ValueError(_message("stop_when_held", self.stop_when_held, "absent (or false) unless dead_weight and "
+                                      "t_decide are given with geometry = 'slab' (the rigid top whose ringing periods "
+                                      "the velocity is read over)"))
         if self.integrator != "implicit" and self.energy_tol != OFF["energy_tol"]:
             raise ValueError(_message("energy_tol", self.energy_tol, "absent unless integrator = 'implicit' (it bounds "
                                       f"the backward-Euler steps' numerical dissipation; here integrator = '{self.integrator}')"))

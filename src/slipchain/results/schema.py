@@ -357,25 +357,55 @@ def _released_runaway(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
     come back. The first period after the ramp holds the release's own rise from rest (its mean velocity
     rises by construction), so the check starts at RING_START = 3 periods after the ramp: the two windows
     are the second and third periods. Measured on the 82 stored release runs (16 x 16 to 128 x 128, three
-    seeds, 20 and 11 deg C, eta_c 0.1 and 1 omega0; docs/tester-3d "Stopping a released runaway"): every
+    seeds, 20 and 11 deg C, eta_c 0.1 and 1 omega0; docs/tester-3d "Stopping a released run early"): every
     held or steady run fails the test from 2.04 T on, every runaway passes it from 2.67 T on, and
     ``slipchain figure traces --redecide T --stop-at-runaway`` replays the rule on a store."""
-    period = top_ringing_period(cfg)
-    ramp = dead_weight_ramp_time(cfg) or 0.0
+    got = _period_velocities(cfg, time, X_mean)
+    if got is None:
+        return None
+    v1, v2, period = got
     t = time[-1]
-    if period is None or t < ramp + RING_START * period * (1.0 - 1e-9):
-        return None
-    i0, i1 = np.searchsorted(time, (t - 2.0 * period * (1.0 + 1e-9), t - period * (1.0 + 1e-9)))
-    if i1 <= i0 or i1 >= time.size - 1:
-        return None
-    v1 = (X_mean[i1] - X_mean[i0]) / (time[i1] - time[i0])
-    v2 = (X_mean[-1] - X_mean[i1]) / (t - time[i1])
     v_branch = _beyond_branch(cfg)
     if not (v1 > v_branch and v2 > v1):
         return None
     return (f"runaway: by t = {t:.6g} s the released top slid at {v1:.3g} and then {v2:.3g} m/s over its last two "
             f"ringing periods ({period:.3g} s each; > {RUNAWAY_FACTOR:g} v0 10**delta = {v_branch:.3g} m/s, and faster), "
             "beyond the maximum of mu(v) under a load that no longer grows: stopped there (stop_at_runaway)")
+
+
+def _period_velocities(cfg, time: np.ndarray, X_mean: np.ndarray) -> tuple[float, float, float] | None:
+    """The top's mean velocities over the record's last two ringing periods (the one before the last, the
+    last) and that period, once the record reaches RING_START periods after the ramp; else None."""
+    period = top_ringing_period(cfg)
+    ramp = dead_weight_ramp_time(cfg) or 0.0
+    if period is None or time.size < 3 or time[-1] < ramp + RING_START * period * (1.0 - 1e-9):
+        return None
+    t = time[-1]
+    i0, i1 = np.searchsorted(time, (t - 2.0 * period * (1.0 + 1e-9), t - period * (1.0 + 1e-9)))
+    if i1 <= i0 or i1 >= time.size - 1:
+        return None
+    return ((X_mean[i1] - X_mean[i0]) / (time[i1] - time[i0]), (X_mean[-1] - X_mean[i1]) / (t - time[i1]), period)
+
+
+def certain_held(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
+    """Config ``stop_when_held``: whether the released slab's top is back on the rising branch of mu(v) for good,
+    and why (None if it is not). Its mean velocity over each of its last two ringing periods
+    (:func:`~slipchain.model.system.top_ringing_period`; the ringing cancels over a period, as in
+    :func:`_released_runaway`) is below v0 10**delta, the last contact's maximum of eq. (1), and over the
+    last period below the one before: the slider slides, on average, where the contacts' forces rise with
+    velocity, and slows down under a load that no longer grows, towards the steady velocity where they carry
+    it (or to rest), as every such run of the stored release runs did to t_max (docs/tester-3d "Stopping a
+    released run early"). Checked from RING_START periods after the ramp on, as the runaway."""
+    got = _period_velocities(cfg, time, X_mean)
+    if got is None:
+        return None
+    v1, v2, period = got
+    v_top = cfg.v0 * 10.0**cfg.delta
+    if not (v1 < v_top and v2 < v1):
+        return None
+    return (f"held: by t = {time[-1]:.6g} s the released top slid at {v1:.3g} and then {v2:.3g} m/s over its last two "
+            f"ringing periods ({period:.3g} s each; < v0 10**delta = {v_top:.3g} m/s, and slower): back on the rising "
+            "branch of mu(v) under a load that no longer grows, below the maximum: stopped there (stop_when_held)")
 
 
 def certain_runaway(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
@@ -458,6 +488,10 @@ def dead_weight_status(cfg, time: np.ndarray, X_mean: np.ndarray) -> tuple[str, 
                and time[-1] < cfg.t_decide - 0.5 * cfg.output_interval else None)
     if stopped is not None:  # the run stopped before t_decide at a certain runaway (control.UntilDecided)
         status, reason, fit = str(VelocityStatus.RUNAWAY), stopped, None
+    held = (certain_held(cfg, time, X_mean) if cfg.stop_when_held and status != VelocityStatus.RUNAWAY and time.size
+            and cfg.t_decide - 0.5 * cfg.output_interval <= time[-1] < cfg.t_max - 0.5 * cfg.output_interval else None)
+    if held is not None and status != VelocityStatus.OK:  # stopped at a decision once back on the branch for good
+        status, reason = str(VelocityStatus.NO_STEADY), f"{held}; {reason}"
     return status, reason, fit
 
 

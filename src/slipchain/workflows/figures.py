@@ -135,7 +135,8 @@ def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 
 def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: float,
-           redecide: list[float] | tuple[float, ...] = (), stop_at_runaway: bool = False) -> tuple[list[Path], list[str]]:
+           redecide: list[float] | tuple[float, ...] = (), stop_at_runaway: bool = False,
+           stop_when_held: bool = False) -> tuple[list[Path], list[str]]:
     """The top's velocity against time of every run of dead-weight stores, over windows of ``window`` s,
     with each run's outcome and each runaway's onset (:mod:`slipchain.analysis.traces`): the figure,
     traces.csv (one row per window), onsets.csv (one row per run), mu_max.csv
@@ -146,7 +147,8 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
     against the steady runs (branch_check.csv) and read at fixed velocities (branch_mu.csv:
     :func:`~slipchain.analysis.traces.branch_summary`); with ``redecide`` (seconds), each run's automatic length
     replayed at each of those t_decide (:func:`~slipchain.analysis.traces.redecide`: redecide.csv; with
-    ``stop_at_runaway``, with that config on: a released runaway stopped over its top's ringing periods); returns the
+    ``stop_at_runaway`` or ``stop_when_held``, with that config on: a released runaway, or a held run, stopped over its
+    top's ringing periods); returns the
     paths, a line on that check, one line per group of mu_max.csv, one per bracket and one per replayed t_decide."""
     from ..analysis.traces import branch_check, branch_summary, onset_summary, protocol_brackets, velocity_traces
     from ..analysis.traces import redecide as replay
@@ -170,7 +172,7 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
                   write_csv(at_v, Path(out) / "branch_mu.csv", float_format="%.6g")]
     replays = []
     if redecide:
-        table, skipped = replay(stores, redecide, stop_at_runaway)
+        table, skipped = replay(stores, redecide, stop_at_runaway, stop_when_held)
         paths.append(write_csv(table, Path(out) / "redecide.csv", float_format="%.6g"))
         replays = [(t, table[table["t_decide_replay"] == t] if len(table) else table, skipped[float(t)]) for t in redecide]
     lines = []
@@ -181,7 +183,8 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
         run = table[table["outcome"] == "runaway"]
         stops = (f"; the runaways stop at {run['t_stop'].median():.3g} s (median) instead of {run['t_end'].median():.3g} s"
                  if len(run) else "")
-        with_stop = " with stop_at_runaway" if stop_at_runaway else ""
+        with_stop = "".join(f" with {k}" for k, on in (("stop_at_runaway", stop_at_runaway),
+                                                        ("stop_when_held", stop_when_held)) if on)
         lines.append(f"t_decide = {t_decide:g} s replayed{with_stop} on {len(table)} runs: {int(table['agree'].sum())} on the same "
                      f"side of mu_max{stops}" + (f" ({skipped} skipped: their ramps do not end before it)" if skipped else "")
                      + " (redecide.csv)")
