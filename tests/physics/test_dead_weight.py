@@ -198,6 +198,30 @@ def test_a_released_runaway_is_read_over_the_tops_last_two_ringing_periods():
     assert runaway_window(slow) == 0.02  # a slowly loaded run keeps the 20-ms halves
 
 
+def test_a_held_top_is_read_over_its_last_two_ringing_periods():
+    """certain_held (config stop_when_held) on records of exact velocities (v0 10**delta = 1e-3 m/s, the branch's
+    top here): ringing at +-0.5 m/s about a mean below the top and falling, held from 3 T after the ramp on, not
+    before; about a mean that rises, or that falls from above the top, not held."""
+    from slipchain.model.system import top_ringing_period
+    from slipchain.results.schema import certain_held
+
+    cfg = make_config(**RELEASE, dead_weight=0.3, stop_when_held=True)
+    T = top_ringing_period(cfg)
+    dt = 1e-6
+    t = np.arange(1, int(round(6 * T / dt)) + 1) * dt
+
+    def verdict(v, upto):
+        n = int(np.searchsorted(t, upto))
+        return certain_held(cfg, t[:n], np.cumsum(v * dt)[:n])
+
+    ring = 0.5 * np.sin(2 * np.pi * t / T)
+    falling = ring + 5e-4 * np.exp(-t / T)
+    assert verdict(falling, 2.9 * T) is None and "held" in verdict(falling, 3.05 * T)
+    for upto in np.linspace(3.05 * T, 6 * T, 7):
+        assert verdict(ring + 2e-4 * t / T, upto) is None  # a rising mean, below the top
+        assert verdict(ring + 0.05 * np.exp(-t / (20 * T)), upto) is None  # falling, but far above the top
+
+
 def test_a_released_slab_stops_at_its_runaway_or_once_held_as_its_replay_does(tmp_path, store_of_runs):
     """The released 4 x 4 slab (RELEASE) below and above the contacts' maximum, with stop_at_runaway and
     stop_when_held: the runaway stops at the first chunk end from 3 T on (7.52 ms here, where the decision at
