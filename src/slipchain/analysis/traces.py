@@ -312,22 +312,13 @@ def redecide(stores: list[str | os.PathLike], t_decides: list[float] | tuple[flo
 def _replay(cfg, time: np.ndarray, x: np.ndarray, t_decide: float, ramp: float, stop: bool = False,
             held: bool = False) -> dict:
     """:func:`redecide` for one stored record at one ``t_decide`` (``stop``, ``held``: configs ``stop_at_runaway``,
-    ``stop_when_held``): the identifying columns and the replay's."""
-    from ..engine.control import DeadWeightRamp, RowControl, UntilDecided, chunk_samples
-    from ..engine.scheme import O_XUMEAN
+    ``stop_when_held``): the identifying columns and the replay's
+    (:func:`~slipchain.engine.control.replay_decision`)."""
+    from ..engine.control import replay_decision
     from ..results.schema import dead_weight_status
 
     c = cfg.model_copy(update={"t_decide": t_decide, "t_ramp": ramp, "stop_at_runaway": stop, "stop_when_held": held})
-    interval = c.output_interval
-    row = RowControl(limit=time.size, ramp=DeadWeightRamp(0.0, max(1, int(round(ramp / interval)))),
-                     decide=UntilDecided(c, interval, max(1, int(round(t_decide / interval)))))
-    chunk = chunk_samples(c, interval)
-    while row.active:  # the chunks the run's driver gave it (engine.driver.drive), each checked at its end
-        k = row.next_samples(chunk)
-        out_row = np.zeros((k, O_XUMEAN + 1))
-        out_row[:, O_XUMEAN] = x[row.n:row.n + k]
-        row.after_chunk(k, out_row)
-    n = row.n
+    n = replay_decision(c, x)
     status_r, _, _ = dead_weight_status(c, time[:n], x[:n])
     out_r, _ = run_outcome(c, status_r, time[:n], x[:n])
     return {"N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c, "theta": cfg.theta, "seed": cfg.seed,

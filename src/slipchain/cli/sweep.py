@@ -146,6 +146,10 @@ def _print_status(st) -> None:
                   " (wall/sim: wall seconds per simulated second so far; <X>: the upper layer, the tester's top, over the last "
                   "10 ms; --json: member ids, messages in full).",
                   markup=False, highlight=False, soft_wrap=True)
+    for m in st.members:
+        if m.rules:
+            out.print(f"{m.label or '(single run)'}: the stop rules (stop_at_runaway, stop_when_held) on its record so far: "
+                      f"{m.rules}", markup=False, highlight=False, soft_wrap=True)
     if st.stray_checkpoints:
         out.print(f"{len(st.stray_checkpoints)} checkpoint(s) of no member of this sweep (batched differently; the "
                   f"next slipchain sweep prunes them): {', '.join(st.stray_checkpoints)}", markup=False, soft_wrap=True)

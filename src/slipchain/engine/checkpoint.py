@@ -290,5 +290,18 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
     return attrs, rows
 
 
+def checkpoint_record(path: str | Path, row: int) -> np.ndarray:
+    """The record <X>(t) of run ``row`` of a checkpoint so far (the upper layer's mean displacement at every
+    output sample from the first; the tester's top under a dead weight). Safe beside a running task, as
+    :func:`checkpoint_rows`; :class:`CheckpointError` for a file that is not a readable checkpoint."""
+    from ..results.io import ENGINE
+
+    try:
+        with xr.open_dataset(path, engine=ENGINE) as ds:
+            return np.asarray(ds[f"rec_samples_{row}"][:, S.O_XUMEAN].values, dtype=float)
+    except Exception as e:  # noqa: BLE001 - as checkpoint_rows
+        raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
+
+
 __all__ = ["CHECKPOINT_EVERY", "RECENT_WINDOW", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored",
-           "checkpoint_rows", "simulated_time"]
+           "checkpoint_record", "checkpoint_rows", "simulated_time"]

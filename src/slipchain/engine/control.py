@@ -343,6 +343,28 @@ class RowControl:
         return self.message
 
 
+def replay_decision(cfg: Config, X_mean: np.ndarray) -> int:
+    """How many samples of the record ``X_mean`` (<X> at every output sample, from the first) a dead-weight run
+    with config ``cfg`` (``t_decide`` given) runs before its automatic length stops it: the record fed in the
+    run's own chunks (:func:`chunk_samples`, a sample at a time while the weight rises:
+    :meth:`RowControl.next_samples`) to :class:`UntilDecided`, as the run's driver feeds it
+    (:func:`slipchain.engine.driver.drive`); the record's length if nothing stops it there. It reads the
+    config and the record alone, so a stored or checkpointed record can be replayed with other ``t_decide``,
+    ``t_ramp``, ``stop_at_runaway`` or ``stop_when_held`` (:func:`slipchain.analysis.traces.redecide`,
+    ``slipchain status``)."""
+    interval = cfg.output_interval
+    ramp = dead_weight_ramp_time(cfg)
+    row = RowControl(limit=X_mean.size, ramp=DeadWeightRamp(0.0, max(1, int(round(ramp / interval)))),
+                     decide=UntilDecided(cfg, interval, max(1, int(round(cfg.t_decide / interval)))))
+    chunk = chunk_samples(cfg, interval)
+    while row.active:  # the chunks the run's driver gives it, each checked at its end
+        k = row.next_samples(chunk)
+        out_row = np.zeros((k, S.O_XUMEAN + 1))
+        out_row[:, S.O_XUMEAN] = X_mean[row.n:row.n + k]
+        row.after_chunk(k, out_row)
+    return row.n
+
+
 def row_control(system: System, x0_mean: float, interval: float,
                 memory_refusal: Callable[[Any, float, float], str | None] | None = None) -> RowControl:
     """The control of one realisation from its config: fixed length (``t_total``), automatic
@@ -367,5 +389,5 @@ def row_control(system: System, x0_mean: float, interval: float,
     )
 
 
-__all__ = ["CHUNK_TIME", "DEFAULT_MIN_CYCLES", "FEW_CYCLES", "LONG_CHUNK_TIME", "chunk_samples", "chunk_time", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided",
+__all__ = ["CHUNK_TIME", "DEFAULT_MIN_CYCLES", "FEW_CYCLES", "LONG_CHUNK_TIME", "chunk_samples", "chunk_time", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided", "replay_decision",
            "row_control"]

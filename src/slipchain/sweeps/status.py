@@ -11,7 +11,10 @@ far each checkpointed run has got and at what cost, and whether a driver is runn
 * ``checkpoints/<key>.nc``: each run's config and samples done
   (:func:`~slipchain.engine.checkpoint.checkpoint_rows`), matched to its member by the config text,
   and the wall time the task has spent so far (summed over resumes);
-* ``driver.json``: the driver that holds the store, if any.
+* ``driver.json``: the driver that holds the store, if any;
+* for a checkpointed release of the slab (the tester's block), what the stop rules (configs
+  ``stop_at_runaway``, ``stop_when_held``) say of its record so far (:func:`stop_rules`), also for a run
+  started without them: whether it is decided already.
 
 It takes no lock and writes nothing, so it is safe beside a running sweep: member files and
 checkpoints are replaced atomically, never written in place. ``slipchain status --store PATH`` prints it.
@@ -26,7 +29,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from ..engine.checkpoint import CheckpointError, checkpoint_rows
+import numpy as np
+
+from ..engine.checkpoint import CheckpointError, checkpoint_record, checkpoint_rows
+from ..engine.control import replay_decision
 from ..results.schema import Status
 from .definition import Member, SweepError
 from .store import CHECKPOINTS, HOLDER, Store, holder_text, read_holder
@@ -49,6 +55,7 @@ class MemberStatus:
     wall_time_s: float | None  # wall s spent (in flight: the task's, over all its resumes)
     written: str | None  # when the checkpoint was written (in flight only)
     velocity: float | None  # in flight: d<X>/dt over the record's last 10 ms (m/s; the tester's top under a dead weight)
+    rules: str | None = None  # in flight, a released slab: what the stop rules say of its record so far (stop_rules)
 
 
 @dataclass(frozen=True)
@@ -103,7 +110,7 @@ def store_status(path: str | os.PathLike) -> StoreStatus:
         if not mine:
             stray.append(ck.name)
         for r in mine:
-            flying[by_config[r.config].id] = (r, attrs)
+            flying[by_config[r.config].id] = (r, attrs, ck, rows.index(r))
     done, failed = st.completed_ids(), st.failed_ids()
     members = [_member_status(st, m, m.id in done, m.id in failed, flying.get(m.id)) for m in st.sweep.members]
     return StoreStatus(str(path), st.sweep.name, members, driver_status(path), stray, unreadable)
@@ -122,11 +129,38 @@ def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> Me
         return MemberStatus(m.id, m.label(), STORED if done else FAILED, a.get("status"), outcome, str(message or ""),
                             _float(a.get("t_total")), t_max, _float(a.get("wall_time_s")), None, None)
     if flying is not None:
-        row, attrs = flying
+        row, attrs, ck, r = flying
         t = row.samples_done * float(m.config.output_interval)
         return MemberStatus(m.id, m.label(), IN_FLIGHT, None, None, row.message, t, t_max,
-                            _float(attrs.get("wall_time_s")), attrs.get("written"), row.velocity)
+                            _float(attrs.get("wall_time_s")), attrs.get("written"), row.velocity, _rules(m, ck, r))
     return MemberStatus(m.id, m.label(), PENDING, None, None, "", None, t_max, None, None, None)
+
+
+def stop_rules(cfg, X_mean: np.ndarray) -> str | None:
+    """What the stop rules of a released slab (configs ``stop_at_runaway`` and ``stop_when_held``, both on; the
+    run's own ``t_decide``) say of its record <X>(t) so far (:func:`~slipchain.engine.control.replay_decision`):
+    where they stop it and its status there (runaway; no-steady with a "held" reason; ok), or that they have not
+    stopped it yet; None for any other run (no dead weight, no ``t_decide``, not the slab). For a run started
+    without them: how far it would have had to go."""
+    from ..results.schema import dead_weight_status
+
+    if cfg.dead_weight is None or cfg.t_decide is None or cfg.geometry != "slab" or X_mean.size < 2:
+        return None
+    c = cfg.model_copy(update={"stop_at_runaway": True, "stop_when_held": True})
+    n = replay_decision(c, X_mean)
+    time = (np.arange(X_mean.size) + 1) * c.output_interval
+    if n >= X_mean.size:
+        return f"not decided by t = {time[-1]:.4g} s"
+    status, reason, _ = dead_weight_status(c, time[:n], X_mean[:n])
+    said = "held" if reason.startswith("held") else status
+    return f"{said} at t = {time[n - 1]:.4g} s"
+
+
+def _rules(m: Member, ck: Path, r: int) -> str | None:
+    try:
+        return stop_rules(m.config, checkpoint_record(ck, r))
+    except CheckpointError:
+        return None
 
 
 def _float(v: Any) -> float | None:
@@ -159,4 +193,4 @@ def driver_status(path: str | os.PathLike) -> str:
 
 
 __all__ = ["FAILED", "IN_FLIGHT", "PENDING", "STORED", "UNREADABLE", "MemberStatus", "StoreStatus", "driver_status",
-           "store_status"]
+           "stop_rules", "store_status"]
