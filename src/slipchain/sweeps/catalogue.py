@@ -146,7 +146,7 @@ CATALOGUE: dict[str, Study] = {
                               "tester-32-slower on a 64 x 64 interface (seed 0)"),
     "tester-128-long": Study("study", 2, "2 of 2 run: theta = 0.05 held at 0.8 (10 462 s), theta = 0.5 ran away at 0.65 (11 864 s; one core each of a 2-core AMD EPYC with AVX-512)", "docs/tester-3d/index.md",
                              "the release on 128 x 128 at 64 x 64's tightest bounds: theta = 0.05 at 0.8, theta = 0.5 at 0.65 (seed 0; decided from 0.8 s)"),
-    "tester-128-long-2": Study("study", 2, "0 of 2 run; both checkpointed at 0.48 s after about 7 300 s each (one core each of a 2-core AMD EPYC with AVX-512)", "docs/tester-3d/index.md",
+    "tester-128-long-2": Study("study", 2, "1 of 2 run (theta = 0.2 at 0.7 ran away: 13 054 s on one core); theta = 1 at 0.75 checkpointed at 0.83 s after about 13 000 s", "docs/tester-3d/index.md",
                                "tester-128-long at theta = 1, 0.75 and theta = 0.2, 0.7 (64 x 64's held and runaway sides for all three seeds; seed 0)"),
     "tester-128-long-3": Study("study", 4, "0 of 4 run", "docs/tester-3d/index.md",
                                "tester-128-long stopped when decided (stop_at_runaway, stop_when_held): seed 1 at its weights, seed 0 at the other side of its brackets"),
