@@ -243,3 +243,15 @@ def test_redecide_replays_the_automatic_length_as_a_run_with_that_t_decide(tmp_p
     assert "t_decide = 0.001 s replayed on 2 runs: 2 on the same side of mu_max" in r.stdout.replace("\n", " ")
     b = slipchain_cli("figure", "traces", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o2"), "--redecide", "0")
     assert b.returncode == 2 and "--redecide" in b.stderr and not (tmp_path / "o2").exists(), b.stderr
+    for flag in ("--stop-at-runaway", "--stop-when-held"):  # a replay's options, not without one
+        b = slipchain_cli("figure", "traces", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o2"), flag)
+        assert b.returncode == 2 and flag in b.stderr and "--redecide" in b.stderr and not (tmp_path / "o2").exists()
+    # with them on a chain, which has no rigid top to read over its ringing: the same replay, the columns say so
+    r = slipchain_cli("figure", "traces", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o3"), "--window", "1e-4",
+                      "--redecide", "1e-3", "--stop-at-runaway", "--stop-when-held")
+    assert r.returncode == 0, r.stderr
+    ruled = pd.read_csv(tmp_path / "o3" / "redecide.csv")
+    assert ruled["stop_at_runaway"].all() and ruled["stop_when_held"].all()
+    plain = table[table["t_decide_replay"] == 1e-3].reset_index(drop=True)
+    assert ruled["t_stop"].tolist() == plain["t_stop"].tolist() and ruled["status_replay"].tolist() == plain["status_replay"].tolist()
+    assert "replayed with stop_at_runaway with stop_when_held on 2 runs" in r.stdout.replace("\n", " ")
