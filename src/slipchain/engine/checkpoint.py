@@ -251,27 +251,35 @@ class CheckpointRow:
     message: str
     active: bool  # False once the row's run has ended (its batch goes on for the others)
     velocity: float  # d<X>/dt over the record's last RECENT_WINDOW s (m/s; the rigid top's under a dead weight), nan if < 2 samples
+    X_mean: np.ndarray  # the record <X>(t) so far, every output sample from the first (empty where it cannot be read)
 
 
 RECENT_WINDOW = 0.01  # s: the stretch of the record over which checkpoint_rows reads the upper layer's velocity
 
 
-def _recent_velocity(ds: xr.Dataset, r: int, config: str) -> float:
-    """d<X>/dt of row ``r`` over its record's last RECENT_WINDOW s (nan where the record cannot say)."""
+def _record(ds: xr.Dataset, r: int) -> np.ndarray:
+    """Row ``r``'s record <X>(t) so far (empty where the checkpoint holds none)."""
+    try:
+        return np.asarray(ds[f"rec_samples_{r}"][:, S.O_XUMEAN].values, dtype=float)
+    except (KeyError, ValueError, TypeError, IndexError):
+        return np.zeros(0)
+
+
+def _recent_velocity(X: np.ndarray, config: str) -> float:
+    """d<X>/dt of a record over its last RECENT_WINDOW s (nan where the record cannot say)."""
     try:
         interval = float(tomllib.loads(config)["output_interval"])  # the samples' spacing (s)
-        k = max(1, int(round(RECENT_WINDOW / interval)))
-        tail = np.asarray(ds[f"rec_samples_{r}"][-(k + 1):, S.O_XUMEAN].values, dtype=float)
-    except (KeyError, ValueError, TypeError, IndexError, tomllib.TOMLDecodeError):
+    except (KeyError, ValueError, TypeError, tomllib.TOMLDecodeError):
         return float("nan")
+    tail = X[-(max(1, int(round(RECENT_WINDOW / interval))) + 1):]
     return float((tail[-1] - tail[0]) / ((tail.size - 1) * interval)) if tail.size >= 2 else float("nan")
 
 
 def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
     """The attributes of a checkpoint (wall_time_s, t_simulated, written, ...) and one
-    :class:`CheckpointRow` per run in it, reading only those variables and the last samples of each
-    record (for ``slipchain status``: how far a run has got, and how fast its upper layer, or the
-    tester's top, moves now: whether a dead weight is running away or coming back).
+    :class:`CheckpointRow` per run in it, reading only those variables and each record's <X>(t) (for
+    ``slipchain status``: how far a run has got, how fast its upper layer, or the tester's top, moves now:
+    whether a dead weight is running away or coming back, and what the stop rules say of its record).
 
     Safe beside a running task: a checkpoint is replaced atomically, never written in place.
     Raises :class:`CheckpointError` for a file that is not a readable checkpoint.
@@ -282,26 +290,13 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
         with xr.open_dataset(path, engine=ENGINE) as ds:
             attrs = dict(ds.attrs)
             cols = [np.atleast_1d(ds[v].values) for v in ("config", "samples_done", "row_status", "row_message", "active")]
-            recent = [_recent_velocity(ds, r, str(text)) for r, text in enumerate(cols[0])]
+            records = [_record(ds, r) for r in range(cols[0].size)]
     except Exception as e:  # noqa: BLE001 - h5py's OSError, xarray's ValueError, a KeyError: not a whole checkpoint
         raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
-    rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a), float(v))
-            for c, n, st, msg, a, v in zip(*cols, recent)]
+    rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a), _recent_velocity(X, str(c)), X)
+            for c, n, st, msg, a, X in zip(*cols, records)]
     return attrs, rows
 
 
-def checkpoint_record(path: str | Path, row: int) -> np.ndarray:
-    """The record <X>(t) of run ``row`` of a checkpoint so far (the upper layer's mean displacement at every
-    output sample from the first; the tester's top under a dead weight). Safe beside a running task, as
-    :func:`checkpoint_rows`; :class:`CheckpointError` for a file that is not a readable checkpoint."""
-    from ..results.io import ENGINE
-
-    try:
-        with xr.open_dataset(path, engine=ENGINE) as ds:
-            return np.asarray(ds[f"rec_samples_{row}"][:, S.O_XUMEAN].values, dtype=float)
-    except Exception as e:  # noqa: BLE001 - as checkpoint_rows
-        raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
-
-
 __all__ = ["CHECKPOINT_EVERY", "RECENT_WINDOW", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored",
-           "checkpoint_record", "checkpoint_rows", "simulated_time"]
+           "checkpoint_rows", "simulated_time"]

@@ -87,7 +87,7 @@ def dead_weight_ramp_time(cfg: Config) -> float | None:
     return DEAD_WEIGHT_RAMP * cfg.t_decide if cfg.t_decide is not None else None
 
 
-RING_START = 3  # top_ringing_period: a released run's certain-runaway check starts this many periods after the ramp
+RING_START = 3  # top_ringing_period: a released run's stop rules (certain runaway, certain held) start this many periods after the ramp
 
 
 def top_ringing_period(cfg: Config) -> float | None:

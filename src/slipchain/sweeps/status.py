@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.checkpoint import CheckpointError, checkpoint_record, checkpoint_rows
+from ..engine.checkpoint import CheckpointError, checkpoint_rows
 from ..engine.control import replay_decision
 from ..results.schema import Status
 from .definition import Member, SweepError
@@ -110,7 +110,7 @@ def store_status(path: str | os.PathLike) -> StoreStatus:
         if not mine:
             stray.append(ck.name)
         for r in mine:
-            flying[by_config[r.config].id] = (r, attrs, ck, rows.index(r))
+            flying[by_config[r.config].id] = (r, attrs)
     done, failed = st.completed_ids(), st.failed_ids()
     members = [_member_status(st, m, m.id in done, m.id in failed, flying.get(m.id)) for m in st.sweep.members]
     return StoreStatus(str(path), st.sweep.name, members, driver_status(path), stray, unreadable)
@@ -129,10 +129,11 @@ def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> Me
         return MemberStatus(m.id, m.label(), STORED if done else FAILED, a.get("status"), outcome, str(message or ""),
                             _float(a.get("t_total")), t_max, _float(a.get("wall_time_s")), None, None)
     if flying is not None:
-        row, attrs, ck, r = flying
+        row, attrs = flying
         t = row.samples_done * float(m.config.output_interval)
         return MemberStatus(m.id, m.label(), IN_FLIGHT, None, None, row.message, t, t_max,
-                            _float(attrs.get("wall_time_s")), attrs.get("written"), row.velocity, _rules(m, ck, r))
+                            _float(attrs.get("wall_time_s")), attrs.get("written"), row.velocity,
+                            stop_rules(m.config, row.X_mean))
     return MemberStatus(m.id, m.label(), PENDING, None, None, "", None, t_max, None, None, None)
 
 
@@ -154,13 +155,6 @@ def stop_rules(cfg, X_mean: np.ndarray) -> str | None:
     status, reason, _ = dead_weight_status(c, time[:n], X_mean[:n])
     said = "held" if reason.startswith("held") else status
     return f"{said} at t = {time[n - 1]:.4g} s"
-
-
-def _rules(m: Member, ck: Path, r: int) -> str | None:
-    try:
-        return stop_rules(m.config, checkpoint_record(ck, r))
-    except CheckpointError:
-        return None
 
 
 def _float(v: Any) -> float | None:
