@@ -9,9 +9,11 @@ member's attributes.
 from __future__ import annotations
 
 import json
+import re
 import os
 import socket
 
+import numpy as np
 import pytest
 
 from slipchain import make_config, run
@@ -121,6 +123,8 @@ def test_store_status_says_where_the_stop_rules_decide_a_released_slab(tmp_path)
     checkpointed, not stored: the status says where stop_at_runaway and stop_when_held decide its record so far
     (sweeps.status.stop_rules), the time and verdict of the same run made with them on; a chain's run says
     nothing of them."""
+    from slipchain.model.system import top_ringing_period
+    from slipchain.results.schema import rules_start
     from slipchain.sweeps.status import stop_rules
 
     release = dict(geometry="slab", N=4, Ly=4, N_L=50, theta=1.0, delta=0.0, epsilon=1.0, start="rest",
@@ -135,7 +139,29 @@ def test_store_status_says_where_the_stop_rules_decide_a_released_slab(tmp_path)
         said = "runaway" if m.config.dead_weight == 0.9 else "held"
         assert by[m.id].state == IN_FLIGHT
         assert by[m.id].rules == f"{said} at t = {float(ruled['time'].values[-1]):.4g} s"
-        # its first 2 ms, before three ringing periods (7.5 ms): not decided yet
-        assert stop_rules(m.config, ruled["X_mean"].values[:100]) == "not decided by t = 0.002 s"
+        # its first 2 ms, before three ringing periods (7.5 ms): not decided yet, and when each rule can decide
+        start = rules_start(m.config)
+        assert abs(start - (1e-5 + 3 * top_ringing_period(m.config))) < 1e-12 and 0.002 < start < 0.02
+        assert stop_rules(m.config, ruled["X_mean"].values[:100]) == (
+            f"not decided by t = 0.002 s; the runaway rule reads from t = {start:.4g} s, the held rule from t = 0.02 s")
+        # at 6 ms (past two periods, before three): the top's period means, by interpolation of <X>(t), and the
+        # wall time ahead at the pace given (3600 s of wall per simulated second: hours = simulated seconds)
+        x, t = ruled["X_mean"].values[:300], ruled["time"].values[:300]
+        said = stop_rules(m.config, x, wall_time_s=3600.0 * t[-1])
+        period = top_ringing_period(m.config)
+        v = [(np.interp(t[-1] - k * period, t, x) - np.interp(t[-1] - (k + 1) * period, t, x)) / period
+             for k in (1, 0)]
+        got = re.search(r"periods \(([0-9.e-]+) s each\) the top slid at ([0-9.e-]+) and then ([0-9.e-]+) m/s", said)
+        assert got is not None, said
+        assert float(got[1]) == pytest.approx(period, rel=5e-3)  # printed to 3 digits
+        # the rule's windows start on the sample at or after t - k T: each mean may differ from the interpolated
+        # one by up to one sample interval's share of the fastest velocity in it (printed to 3 digits)
+        recent = t > t[-1] - 2 * period - 1e-4
+        v_fast = np.max(np.abs(np.diff(x[recent]) / np.diff(t[recent])))
+        slack = 2.0 * float(np.diff(t).max()) * v_fast / period
+        assert [float(got[2]), float(got[3])] == pytest.approx(v, rel=5e-3, abs=slack), said
+        hours = re.findall(r"t = ([0-9.e-]+) s is ([0-9.e-]+) h of wall away", said)
+        assert [float(h[0]) for h in hours] == pytest.approx([start, 0.02], rel=1e-3), said
+        assert [float(h[1]) for h in hours] == pytest.approx([start - t[-1], 0.02 - t[-1]], rel=0.03), said
     chain = make_config(**IDENTICAL, dead_weight=0.5, t_ramp=1e-4, t_decide=2e-3, t_max=4e-3)
     assert stop_rules(chain, ruled["X_mean"].values) is None

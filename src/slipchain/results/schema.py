@@ -373,12 +373,22 @@ def _released_runaway(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
             "beyond the maximum of mu(v) under a load that no longer grows: stopped there (stop_at_runaway)")
 
 
-def _period_velocities(cfg, time: np.ndarray, X_mean: np.ndarray) -> tuple[float, float, float] | None:
+def rules_start(cfg) -> float | None:
+    """The time (s) from which the released slab's stop rules (:func:`_released_runaway`, :func:`certain_held`)
+    read the top's ringing periods: RING_START periods after the ramp; None where there is no such top."""
+    period = top_ringing_period(cfg)
+    return None if period is None else (dead_weight_ramp_time(cfg) or 0.0) + RING_START * period
+
+
+def _period_velocities(cfg, time: np.ndarray, X_mean: np.ndarray,
+                       early: bool = False) -> tuple[float, float, float] | None:
     """The top's mean velocities over the record's last two ringing periods (the one before the last, the
-    last) and that period, once the record reaches RING_START periods after the ramp; else None."""
+    last) and that period, once the record reaches RING_START periods after the ramp (``early``: once it
+    holds two periods, for a look at a record the rules do not read yet); else None."""
     period = top_ringing_period(cfg)
     ramp = dead_weight_ramp_time(cfg) or 0.0
-    if period is None or time.size < 3 or time[-1] < ramp + RING_START * period * (1.0 - 1e-9):
+    start = 2.0 * period * (1.0 - 1e-9) if early and period is not None else None
+    if period is None or time.size < 3 or time[-1] < (start or ramp + RING_START * period * (1.0 - 1e-9)):
         return None
     t = time[-1]
     i0, i1 = np.searchsorted(time, (t - 2.0 * period * (1.0 + 1e-9), t - period * (1.0 + 1e-9)))
@@ -542,7 +552,7 @@ def summary(ds: xr.Dataset) -> dict[str, Any]:
 
 
 __all__ = ["DECIDE_DRIFT", "RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
-           "Status", "accelerating_beyond_branch", "certain_runaway", "after_ramp", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
+           "Status", "accelerating_beyond_branch", "certain_runaway", "after_ramp", "rules_start", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
 
 if __name__ == "__main__":  # pragma: no cover - regenerates docs/run-schema.md
     print(schema_markdown(), end="")

@@ -133,28 +133,47 @@ def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> Me
         t = row.samples_done * float(m.config.output_interval)
         return MemberStatus(m.id, m.label(), IN_FLIGHT, None, None, row.message, t, t_max,
                             _float(attrs.get("wall_time_s")), attrs.get("written"), row.velocity,
-                            stop_rules(m.config, row.X_mean))
+                            stop_rules(m.config, row.X_mean, _float(attrs.get("wall_time_s"))))
     return MemberStatus(m.id, m.label(), PENDING, None, None, "", None, t_max, None, None, None)
 
 
-def stop_rules(cfg, X_mean: np.ndarray) -> str | None:
+def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None) -> str | None:
     """What the stop rules of a released slab (configs ``stop_at_runaway`` and ``stop_when_held``, both on; the
     run's own ``t_decide``) say of its record <X>(t) so far (:func:`~slipchain.engine.control.replay_decision`):
     where they stop it and its status there (runaway; no-steady with a "held" reason; ok), or that they have not
     stopped it yet; None for any other run (no dead weight, no ``t_decide``, not the slab). For a run started
-    without them: how far it would have had to go."""
-    from ..results.schema import dead_weight_status
+    without them: how far it would have had to go. Not decided yet, it adds what the rules read so far (the top's
+    mean velocity over its last two ringing periods against their bounds), from when each can stop the run, and,
+    given the run's wall time so far (``wall_time_s``), how much more wall time the run needs to get there at its
+    mean pace so far (an estimate: a run's pace changes as its slip does)."""
+    from ..results.schema import _beyond_branch, _period_velocities, dead_weight_status, rules_start
 
     if cfg.dead_weight is None or cfg.t_decide is None or cfg.geometry != "slab" or X_mean.size < 2:
         return None
     c = cfg.model_copy(update={"stop_at_runaway": True, "stop_when_held": True})
     n = replay_decision(c, X_mean)
     time = (np.arange(X_mean.size) + 1) * c.output_interval
-    if n >= X_mean.size:
-        return f"not decided by t = {time[-1]:.4g} s"
-    status, reason, _ = dead_weight_status(c, time[:n], X_mean[:n])
-    said = "held" if reason.startswith("held") else status
-    return f"{said} at t = {time[n - 1]:.4g} s"
+    if n < X_mean.size:
+        status, reason, _ = dead_weight_status(c, time[:n], X_mean[:n])
+        said = "held" if reason.startswith("held") else status
+        return f"{said} at t = {time[n - 1]:.4g} s"
+    t = time[-1]
+    out = f"not decided by t = {t:.4g} s"
+    got = _period_velocities(c, time, X_mean, early=True)
+    if got is not None:
+        v1, v2, period = got
+        out += (f"; over its last two ringing periods ({period:.3g} s each) the top slid at {v1:.3g} and then "
+                f"{v2:.3g} m/s (a runaway: both beyond {_beyond_branch(c):.3g} m/s and faster; held: both below "
+                f"{c.v0 * 10.0**c.delta:.3g} m/s and slower)")
+    start = rules_start(c)
+    runaway_from, held_from = start, max(start, float(c.t_decide))
+    out += f"; the runaway rule reads from t = {runaway_from:.4g} s, the held rule from t = {held_from:.4g} s"
+    ahead = [x for x in (runaway_from, held_from) if x > t]
+    if wall_time_s and ahead:
+        pace = wall_time_s / t
+        out += " (at its pace so far, " + " and ".join(
+            f"t = {x:.4g} s is {(x - t) * pace / 3600.0:.2g} h of wall away" for x in dict.fromkeys(ahead)) + ")"
+    return out
 
 
 def _float(v: Any) -> float | None:
