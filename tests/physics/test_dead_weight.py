@@ -173,7 +173,7 @@ def test_a_released_runaway_is_read_over_the_tops_last_two_ringing_periods():
     overshoot from rest that peaks at 2 T and comes back, not (a check from 2 T would have called it a runaway:
     why the first period is left out)."""
     from slipchain.model.system import RING_START, top_ringing_period
-    from slipchain.results.schema import certain_runaway, runaway_window
+    from slipchain.results.schema import RUNAWAY_RISE, certain_runaway, runaway_window
 
     cfg = make_config(**RELEASE, dead_weight=0.9, stop_at_runaway=True)
     T = top_ringing_period(cfg)
@@ -191,6 +191,12 @@ def test_a_released_runaway_is_read_over_the_tops_last_two_ringing_periods():
         assert verdict(ring + 0.002 * t / T, upto) is None  # a rising mean, below the bound over the period before
     rising = ring + 0.02 * t / T  # the mean beyond the branch, and rising
     assert verdict(rising, 2.9 * T) is None and "ringing periods" in verdict(rising, 3.05 * T)
+    # beyond the branch (three times the bound) and barely faster: 1.4 % a period, as the top that slowed down and came
+    # back (tester-16-long-etac-3-check), never; 6 % a period (the stored runaways: 5.8 % or more), from 3 periods on
+    assert RUNAWAY_RISE == 1.05
+    assert all(verdict(ring + 0.03 * 1.014 ** (t / T), upto) is None for upto in np.linspace(3 * T, 6 * T, 7))
+    faster = ring + 0.03 * 1.06 ** (t / T)
+    assert verdict(faster, 2.9 * T) is None and "5% faster or more" in verdict(faster, 3.05 * T)
     overshoot = np.where(t < 2 * T, 0.05 * t / T, 0.1 * np.exp(-(t - 2 * T) / (0.1 * T)))
     assert all(verdict(overshoot, upto) is None for upto in np.linspace(3 * T, 6 * T, 7))
     slow = make_config(N=11, theta=1.0, delta=0.0, dead_weight=1.0, t_ramp=0.15, t_decide=0.2, t_max=0.3,
