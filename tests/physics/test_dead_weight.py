@@ -166,6 +166,26 @@ def test_the_top_rings_with_the_period_of_its_mass_on_the_layers_shear():
     assert top_ringing_period(make_config(geometry="slab", N=4, Ly=4)) is None
 
 
+def test_a_creep_that_speeds_up_on_the_rising_branch_is_no_runaway():
+    """dead_weight_status on exact records after the weight (v0 10**delta = 1e-3 m/s): a velocity that rises by
+    about 20 % over the tester's last window is a runaway beyond v0 10**delta, and no-steady (a held run: on the
+    rising branch, below the maximum) below it, where a released top creeps and its ringing's residual or a creep
+    that speeds up makes the fit "still rise" (tester-16-long-etac-3-check: back on the branch at 1.8 s, creeping
+    at 5e-5 m/s, read "runaway: the velocity still rises by +10 %" at 3 s before this)."""
+    from slipchain.analysis.traces import run_outcome
+    from slipchain.results.schema import dead_weight_status
+
+    cfg = make_config(N=11, theta=1.0, delta=0.0, dead_weight=1.0, t_ramp=1e-3, t_decide=2.0, t_max=3.0)
+    t = np.arange(1, 3001) * 1e-3
+    for v0, says, outcome in ((5e-5, "no-steady", "held"), (2e-4, "no-steady", "held"), (5e-3, "runaway", "runaway")):
+        x = v0 * (t + 0.25 * t**2 / t[-1])  # the velocity rises steadily, by 20 % of v0 over the last window
+        status, reason, _ = dead_weight_status(cfg, t, x)
+        assert status == says, (v0, reason)
+        assert run_outcome(cfg, status, t, x)[0] == outcome
+        assert ("creeps on the rising branch" in reason) == (says == "no-steady"), reason
+        assert "still rises" in reason  # the tester's fit, quoted either way
+
+
 def test_a_released_runaway_is_read_over_the_tops_last_two_ringing_periods():
     """certain_runaway for a release on the slab's top (results.schema._released_runaway) on records of exact
     velocities: ringing far beyond the branch about a mean that falls, never; a mean velocity beyond the branch
