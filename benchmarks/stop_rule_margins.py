@@ -55,13 +55,13 @@ def margins(stores: list[str]) -> pd.DataFrame:
         k = chunk_samples(cfg, cfg.output_interval)
         bound = _beyond_branch(cfg)
         first = rule = None
-        top = float("nan")
+        ratios = []
         for n in range(k, time.size + 1, k):
             got = _period_velocities(cfg, time[:n], x[:n])
             if got is None or not got[0] > bound:
                 continue
             v1, v2, _ = got
-            top = max(top, v2 / v1) if top == top else v2 / v1
+            ratios.append(v2 / v1)
             if first is None and v2 > v1:
                 first = (time[n - 1], v2 / v1, v1 / bound)
             if rule is None and v2 > RUNAWAY_RISE * v1:
@@ -70,7 +70,8 @@ def margins(stores: list[str]) -> pd.DataFrame:
                          eta_c=cfg.eta_c, theta=cfg.theta, seed=cfg.seed, mu_a=cfg.dead_weight, t_decide=cfg.t_decide,
                          t_end=float(time[-1]), outcome=out, v_end=v_end,
                          t_first=None if first is None else first[0], ratio_first=None if first is None else first[1],
-                         over_bound=None if first is None else first[2], t_rule=rule, max_ratio=top))
+                         over_bound=None if first is None else first[2], t_rule=rule,
+                         max_ratio=max(ratios, default=float("nan"))))
     return pd.DataFrame(rows)
 
 

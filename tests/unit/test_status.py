@@ -9,8 +9,8 @@ member's attributes.
 from __future__ import annotations
 
 import json
-import re
 import os
+import re
 import socket
 
 import numpy as np

@@ -41,6 +41,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..results.schema import branch_scale  # v0 10**delta, the scale of every threshold here
+
 ONSET_FACTOR = 3.0  # the runaway's onset: the velocity passes ONSET_FACTOR v0 10**delta for the last time
 ONSET_CHECK = 10.0  # ...and, for comparison, this multiple
 ELASTIC_WEIGHTS = (0.1, 0.2)  # mu_a: where ramp_branch reads the interface's elastic loading rate (eq. (1) slips < 1e-7 m/s there)
@@ -100,12 +102,6 @@ def first_crossing(time: np.ndarray, x: np.ndarray, threshold: float) -> float:
     none does."""
     up = np.nonzero(_sample_velocity(time, x) > threshold)[0]
     return float(time[up[0] + 1]) if up.size else float("nan")
-
-
-def branch_scale(cfg) -> float:
-    """v0 10**delta (m/s): the velocity of the last contact's maximum of eq. (1) (the paper's v* at its upper
-    end), the scale of every threshold here (ONSET_FACTOR, ONSET_CHECK times it)."""
-    return cfg.v0 * 10.0 ** cfg.delta
 
 
 def is_release(cfg, time: np.ndarray, x: np.ndarray) -> bool:

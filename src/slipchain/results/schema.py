@@ -23,7 +23,7 @@ from ..model.system import (DEAD_WEIGHT_RAMP, RING_START, State, System, dead_we
                             mu_star_norm, top_ringing_period)
 from .checks import CheckResult, arm_energy, displacement_check, energy_check, stored_energy
 from .observables import SLOW_FRACTION, steady_estimate, window_velocity
-from .velocity import N_STARTS, REL_TOL, VelocityFit, VelocityStatus, steady_velocity
+from .velocity import N_STARTS, REL_TOL, VelocityFit, VelocityStatus, steady_velocity, window_start
 
 
 class Status(StrEnum):
@@ -310,6 +310,13 @@ def after_ramp(cfg, time: np.ndarray) -> np.ndarray:
     return time > (ramp_time if ramp_time is not None else DEAD_WEIGHT_RAMP * time[-1])
 
 
+def branch_scale(cfg) -> float:
+    """v0 10**delta (m/s): the velocity of the last contact's maximum of eq. (1) (the paper's v* at its upper
+    end): below it a slider is on the rising branch of mu(v). The scale of the dead-weight thresholds here and in
+    :mod:`slipchain.analysis.traces` (ONSET_FACTOR, ONSET_CHECK times it)."""
+    return cfg.v0 * 10.0 ** cfg.delta
+
+
 def _beyond_branch(cfg) -> float:
     """RUNAWAY_FACTOR*v0*10**delta: a velocity far above the last contact's maximum of eq. (1)."""
     return RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta
@@ -334,10 +341,9 @@ def dead_weight_velocity(cfg, time: np.ndarray, X_mean: np.ndarray) -> tuple[str
         # "still rises" read over the fit's last window (its last 40 % of the record): a slider there slower on
         # average than v0 10**delta, the last contact's maximum of eq. (1), creeps on the rising branch, below the
         # maximum; its rise (a released top's ringing residual, or a creep that speeds up) is no runaway by itself
-        t0 = time[0] + (N_STARTS - 1) * (time[-1] - time[0]) / 10
-        i = int(np.searchsorted(time, t0))
+        i = int(np.searchsorted(time, window_start(time, N_STARTS - 1)))
         v_mean = (X_mean[-1] - X_mean[i]) / (time[-1] - time[i]) if i < time.size - 1 else float("nan")
-        v_top = cfg.v0 * 10.0**cfg.delta
+        v_top = branch_scale(cfg)
         if v_mean < v_top:
             status = VelocityStatus.NO_STEADY
             reason = (f"no steady sliding: the slider creeps on the rising branch of mu(v) at {v_mean:.3g} m/s over "
@@ -410,9 +416,10 @@ def _period_velocities(cfg, time: np.ndarray, X_mean: np.ndarray,
     last) and that period, once the record reaches RING_START periods after the ramp (``early``: once it
     holds two periods, for a look at a record the rules do not read yet); else None."""
     period = top_ringing_period(cfg)
-    ramp = dead_weight_ramp_time(cfg) or 0.0
-    start = 2.0 * period * (1.0 - 1e-9) if early and period is not None else None
-    if period is None or time.size < 3 or time[-1] < (start or ramp + RING_START * period * (1.0 - 1e-9)):
+    if period is None or time.size < 3:
+        return None
+    first = 2.0 * period * (1.0 - 1e-9) if early else (dead_weight_ramp_time(cfg) or 0.0) + RING_START * period * (1.0 - 1e-9)
+    if time[-1] < first:
         return None
     t = time[-1]
     i0, i1 = np.searchsorted(time, (t - 2.0 * period * (1.0 + 1e-9), t - period * (1.0 + 1e-9)))
@@ -437,7 +444,7 @@ def certain_held(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
     if got is None:
         return None
     v1, v2, period = got
-    v_top = cfg.v0 * 10.0**cfg.delta
+    v_top = branch_scale(cfg)
     if not (v1 < v_top and v2 < v1):
         return None
     return (f"held: by t = {time[-1]:.6g} s the released top slid at {v1:.3g} and then {v2:.3g} m/s over its last two "
@@ -576,7 +583,7 @@ def summary(ds: xr.Dataset) -> dict[str, Any]:
 
 
 __all__ = ["DECIDE_DRIFT", "RUN_ATTRIBUTES", "RUN_VARIABLES", "RUNAWAY_FACTOR", "RUNAWAY_RISE", "SUMMARY_KEYS", "SWEEP_VARIABLES", "Entry", "Recording",
-           "Status", "accelerating_beyond_branch", "certain_runaway", "after_ramp", "rules_start", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
+           "Status", "accelerating_beyond_branch", "certain_runaway", "after_ramp", "branch_scale", "rules_start", "assemble_run", "contacts_over_whole_run", "dead_weight_attrs", "dead_weight_velocity", "velocity_decided", "schema_markdown", "summary"]
 
 if __name__ == "__main__":  # pragma: no cover - regenerates docs/run-schema.md
     print(schema_markdown(), end="")

@@ -88,15 +88,19 @@ def _lag1(resid: np.ndarray) -> float:
     return float(r[:-1] @ r[1:]) / den if den > 0 else 0.0
 
 
+def window_start(t: np.ndarray, k: int) -> float:
+    """Where the k-th candidate window of :func:`steady_velocity` starts: k tenths of the record in (k < N_STARTS)."""
+    return t[0] + k * (t[-1] - t[0]) / 10
+
+
 def steady_velocity(t: np.ndarray, x: np.ndarray, rel_tol: float = REL_TOL) -> VelocityFit:
     """Find the steady-sliding window of one trace and fit the velocity (see module docstring;
     ``rel_tol`` the small velocity change of step 2, REL_TOL for the tester)."""
     t = np.asarray(t, float)
     x = np.asarray(x, float)
-    T = t[-1] - t[0]
     last = None
     for k in range(N_STARTS):
-        t_k = t[0] + k * T / 10
+        t_k = window_start(t, k)
         sel = t >= t_k
         tt, xx = t[sel], x[sel]
         if tt.size < 10:
@@ -133,4 +137,4 @@ def steady_velocity(t: np.ndarray, x: np.ndarray, rel_tol: float = REL_TOL) -> V
                        f"last {W:.3g} s")
 
 
-__all__ = ["NO_STEADY", "OK", "RUNAWAY", "VelocityFit", "VelocityStatus", "steady_velocity"]
+__all__ = ["NO_STEADY", "OK", "RUNAWAY", "VelocityFit", "VelocityStatus", "steady_velocity", "window_start"]

@@ -146,7 +146,8 @@ def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None) -> str
     mean velocity over its last two ringing periods against their bounds), from when each can stop the run, and,
     given the run's wall time so far (``wall_time_s``), how much more wall time the run needs to get there at its
     mean pace so far (an estimate: a run's pace changes as its slip does)."""
-    from ..results.schema import RUNAWAY_RISE, _beyond_branch, _period_velocities, dead_weight_status, rules_start
+    from ..results.schema import (RUNAWAY_RISE, _beyond_branch, _period_velocities, branch_scale, dead_weight_status,
+                                  rules_start)
 
     if cfg.dead_weight is None or cfg.t_decide is None or cfg.geometry != "slab" or X_mean.size < 2:
         return None
@@ -164,8 +165,7 @@ def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None) -> str
         v1, v2, period = got
         out += (f"; over its last two ringing periods ({period:.3g} s each) the top slid at {v1:.3g} and then "
                 f"{v2:.3g} m/s (a runaway: both beyond {_beyond_branch(c):.3g} m/s and {RUNAWAY_RISE - 1:.0%} faster; "
-                f"held: both below "
-                f"{c.v0 * 10.0**c.delta:.3g} m/s and slower)")
+                f"held: both below {branch_scale(c):.3g} m/s and slower)")
     start = rules_start(c)
     runaway_from, held_from = start, max(start, float(c.t_decide))
     out += f"; the runaway rule reads from t = {runaway_from:.4g} s, the held rule from t = {held_from:.4g} s"
