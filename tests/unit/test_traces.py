@@ -118,8 +118,8 @@ def test_the_brackets_are_seed_by_seed_and_their_envelope():
     rows = [(0.5, 0, 0.6, "held"), (0.5, 0, 0.7, "runaway"), (0.5, 0, 0.8, "runaway"), (0.5, 1, 0.6, "steady"),
             (0.5, 1, 0.65, "undecided"), (0.5, 1, 0.75, "runaway"), (1.0, 0, 0.8, "held"), (1.0, 0, 0.75, "runaway"),
             (1.0, 1, 0.75, "held")]
-    runs = pd.DataFrame([{"N": 16, "temperature": 20.0, "eta_c": 1e5, "t_ramp": 1e-3, "theta": th, "seed": sd, "mu_a": m, "outcome": o}
-                         for th, sd, m, o in rows])
+    runs = pd.DataFrame([{"N": 16, "temperature": 20.0, "eta_c": 1e5, "t_ramp": 1e-3, "t_decide": 2.0, "theta": th, "seed": sd,
+                          "mu_a": m, "outcome": o} for th, sd, m, o in rows])
     per_seed = seed_brackets(runs, ["theta"]).set_index(["theta", "seed"])
     assert per_seed.loc[(0.5, 0), ["lo", "hi"]].tolist() == [0.6, 0.7]
     assert per_seed.loc[(0.5, 1), ["lo", "hi"]].tolist() == [0.6, 0.75]  # the undecided 0.65 bounds nothing
@@ -127,6 +127,12 @@ def test_the_brackets_are_seed_by_seed_and_their_envelope():
     b = protocol_brackets(runs).set_index("theta")
     assert b.loc[0.5, ["lo", "hi", "seeds", "runs", "inconsistent"]].tolist() == [0.6, 0.75, 2, 6, 0]
     assert b.loc[1.0, "inconsistent"] == 1 and b.loc[0.5, "per_seed"] == "seed 0: [0.6, 0.7); seed 1: [0.6, 0.75)"
+    # decided at another length, a run is another protocol: its own bracket, not a refutation of this one (at 0.3
+    # omega0 the 16 x 16 release at theta = 0.05, 0.85 read runaway at t_decide = 0.8 s and held at 2 s)
+    early = runs.iloc[[0, 1]].assign(t_decide=0.8, mu_a=[0.55, 0.6], outcome=["held", "runaway"])
+    b2 = protocol_brackets(pd.concat([runs, early])).set_index(["t_decide", "theta"])
+    assert b2.loc[(0.8, 0.5), ["lo", "hi", "runs", "inconsistent"]].tolist() == [0.55, 0.6, 2, 0]
+    assert b2.loc[(2.0, 0.5), ["lo", "hi", "runs", "inconsistent"]].tolist() == [0.6, 0.75, 6, 0]
 
 
 def test_the_summary_averages_seeds_and_divides_by_the_smallest_load():

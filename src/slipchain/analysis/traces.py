@@ -189,7 +189,10 @@ def seed_brackets(runs: pd.DataFrame, by: list[str] | tuple[str, ...] = (), stat
     return pd.DataFrame(rows, columns=[*keys, "lo", "hi", "runs", "consistent"])
 
 
-BRACKET_KEYS = ("N", "temperature", "eta_c", "t_ramp", "theta")  # what distinguishes a protocol's group in the brackets
+# What distinguishes a protocol's group in the brackets: the run's length of decision (config t_decide) among them,
+# since a release read at 0.8 s and one read at 2 s are two protocols whose answers may differ (a top hovering just
+# beyond the branch at 0.8 s came back by 2 s: docs/tester-3d, "The rule's margin"), not one bracket refuted
+BRACKET_KEYS = ("N", "temperature", "eta_c", "t_ramp", "t_decide", "theta")
 KEYS = ("N", "temperature", "eta_c", "rate", "theta")  # what distinguishes a group of runs in onset_summary
 
 
@@ -480,7 +483,7 @@ def branch_summary(branch: pd.DataFrame, velocities: tuple[float, ...] = BRANCH_
 
 def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
     """mu_max under each protocol from its runs' outcomes (:func:`run_outcome`): one row per interface,
-    temperature, contact damping, ramp and load (:data:`BRACKET_KEYS`) with every seed's bracket (:func:`seed_brackets`),
+    temperature, contact damping, ramp, length of decision and load (:data:`BRACKET_KEYS`) with every seed's bracket (:func:`seed_brackets`),
     their envelope [the smallest lo, the largest hi] (``lo``, ``hi``: where the seed mean of mu_max can
     lie), the seeds, the runs, and how many seeds' runs are inconsistent (a held or steady weight at or
     above a runaway one)."""
