@@ -148,7 +148,7 @@ CATALOGUE: dict[str, Study] = {
                              "the release on 128 x 128 at 64 x 64's tightest bounds: theta = 0.05 at 0.8, theta = 0.5 at 0.65 (seed 0; decided from 0.8 s)"),
     "tester-128-long-2": Study("study", 2, "1 of 2 run (theta = 0.2 at 0.7 ran away: 13 054 s on one core); theta = 1 at 0.75 held by the stop rules at 0.995 s, stopped and checkpointed at 1.035 s after 16 419 s", "docs/tester-3d/index.md",
                                "tester-128-long at theta = 1, 0.75 and theta = 0.2, 0.7 (64 x 64's held and runaway sides for all three seeds; seed 0)"),
-    "tester-128-long-3": Study("study", 4, "1 of 4 run (seed 1 theta = 0.5 at 0.65 ran away, stopped at 0.541 s: 16 416 s on one Intel Xeon core beside other runs); seed 0 theta = 0.05 at 0.85 checkpointed at 0.12 s", "docs/tester-3d/index.md",
+    "tester-128-long-3": Study("study", 4, "2 of 4 run (seed 1 theta = 0.5 at 0.65 ran away, stopped at 0.541 s: 16 416 s; seed 0 theta = 0.05 at 0.85 ran away, stopped at 0.182 s: 23 291 s; one Intel Xeon core each beside other runs); the other two in flight", "docs/tester-3d/index.md",
                                "tester-128-long stopped when decided (stop_at_runaway, stop_when_held): seed 1 at its weights, seed 0 at the other side of its brackets"),
     "tester-128-slower": Study("study", 8, "1 of 8 run (theta = 1 at 0.95: 5 423 s on one Zen 5 core; theta = 0.05 at 0.95 checkpointed at 1.45 s after 4 124 s)", "docs/tester-3d/index.md",
                                "tester-32-slower on the issue's 128 x 128 interface (seed 0)"),
