@@ -47,7 +47,7 @@ RUNAWAY_FACTOR = 10.0
 # A released top's mean velocity over its last ringing period at least this times the one before: accelerating beyond
 # the ringing's residual (_released_runaway). A top that slid at 1.1 times the bound, 1.4 % faster over its last period,
 # came back after 1.3 s (tester-16-long-etac-3-check); the stored runaways were 4.1 % faster or more where the rule
-# first read them beyond the bound (the two below 5 % passed it a period or two later and, run on without the rules,
+# first read them beyond the bound (the two below 5 % passed it within a ringing period and, run on without the rules,
 # ran away: tester-16-long-etac-seeds-check), and no other run was ever faster there than 1.4 % (docs/tester-3d,
 # "Stopping a released run early", "The rule's margin").
 RUNAWAY_RISE = 1.05
@@ -320,7 +320,9 @@ def branch_scale(cfg) -> float:
 
 
 def _beyond_branch(cfg) -> float:
-    """RUNAWAY_FACTOR*v0*10**delta: a velocity far above the last contact's maximum of eq. (1)."""
+    """RUNAWAY_FACTOR*v0*10**delta: a velocity far above the last contact's maximum of eq. (1). (Not
+    RUNAWAY_FACTOR * branch_scale(cfg): that rounds differently, 0.03162277660168379 against this 0.0316227766016838
+    at v0 = 1e-3, delta = 0.5, and every stored decision was taken against this bound.)"""
     return RUNAWAY_FACTOR * cfg.v0 * 10.0**cfg.delta
 
 
@@ -385,7 +387,7 @@ def _released_runaway(cfg, time: np.ndarray, X_mean: np.ndarray) -> str | None:
     a top just beyond the bound and barely faster can slow down and come back; one did (theta = 0.05 at 0.85,
     eta_c = 0.3 omega0, 16 x 16: 0.0352 then 0.0356 m/s at 0.18 s, slowing from 0.3 s, 0.028 m/s at 1.4 s,
     tester-16-long-etac-3-check), while every stored runaway was 4.1 % faster or more where the rule first read
-    it beyond the bound (the slowest two, below 5 %, were stopped a reading or two later and ran away when run on:
+    it beyond the bound (the slowest two, below 5 %, were stopped within a ringing period and ran away when run on:
     tester-16-long-etac-seeds-check). The first period after the ramp holds the release's own rise from rest (its mean velocity
     rises by construction), so the check starts at RING_START = 3 periods after the ramp: the two windows
     are the second and third periods. Measured on the stored release runs (16 x 16 to 128 x 128, three

@@ -170,7 +170,7 @@ CATALOGUE: dict[str, Study] = {
                                        "the release's dip R(0.5) at eta_c = 0.3 omega0 and omega0, seeds 1 and 2, on seed 0's brackets"),
     "tester-16-long-etac-seeds-2": Study("study", 2, "both run (161 and 177 s beside two sweeps): both ran away, so [0.70, 0.75)", "docs/tester-3d/index.md",
                                          "tester-16-long-etac-seeds' seed 1 at omega0, theta = 0.5 at 0.75 and 0.8 (0.7 held)"),
-    "tester-16-long-etac-seeds-check": Study("study", 2, "started 2026-12-06 on an Intel Xeon beside two sweeps", "docs/tester-3d/index.md",
+    "tester-16-long-etac-seeds-check": Study("study", 2, "both run (1 952 and 496 s beside two sweeps): both ran away, decided at 2 s", "docs/tester-3d/index.md",
                                              "tester-16-long-etac-seeds' two narrowest runaways (+5.0 % a period) without the stop rules, decided from 2 s"),
     "tester-onset-32-etac": Study("study", 8, "all 8 run (146-645 s a run, 2 438 s on one Zen 5 core beside two sweeps)", "docs/tester-3d/index.md",
                                   "tester-onset-32-etol at the paper's other contact dampings, eta_c = 0.3 omega0 and omega0"),
