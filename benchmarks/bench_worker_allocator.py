@@ -29,6 +29,9 @@ CASES = {
                       output_interval=1e-3, theta=0.05, v_d=1e-3, dt=5e-8, t_total=0.01, seed=0),
     "fig6-chain2d": dict(geometry="chain2d", N_L=5, epsilon=1.0, integrator="implicit", start="steady", eta_c=1e5,
                          output_interval=1e-3, theta=0.5, v_d=1e-3, dt=1e-7, t_total=0.01, seed=0),
+    # the same 2-D chains with the adaptive step (explicit steps only; benchmarks/heap_bits.py)
+    "chain2d-adaptive": dict(geometry="chain2d", N_L=5, epsilon=1.0, integrator="adaptive", start="steady", eta_c=1e5,
+                             output_interval=1e-3, theta=0.5, v_d=1e-3, dt=1e-7, t_total=0.01, seed=0),
 }
 
 

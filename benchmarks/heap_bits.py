@@ -3,11 +3,12 @@
 Runs one piece of a run (``bench_worker_allocator.CASES``: TRIALS times in one process, 1 ms after 1 ms) with a
 different set of live arrays of random sizes allocated before each trial, so that the piece's own arrays land
 elsewhere in the heap, and prints how many trials gave each hash of the state and the chunk's outputs. One hash:
-the piece's arithmetic does not follow the addresses. Found on 2026-12-06: the 2-D chains' implicit piece on 64 x 64
-gives a second hash in one trial of 12 (seed 3), first in the compiled explicit steps
-(`compose.krylov_explicit_driver`) from an identical state; not yet traced to its loop (docs/performance.md).
+the piece's arithmetic does not follow the addresses. Found on 2026-12-06: the 2-D chains on 64 x 64 (implicit and
+adaptive) give a second hash in one trial of 12 (seed 3), in their positions and velocities; the 1-D chain, the 2-D
+chains at 16-48 squared, the slab and the tester's block give one (docs/performance.md, where the search so far is).
 
     python benchmarks/heap_bits.py --case fig6-chain2d --L 64 --seed 3 --trials 12
+    python benchmarks/heap_bits.py --case chain2d-adaptive --L 64 --seed 3 --trials 12
     python benchmarks/heap_bits.py --case tester --L 64 --seed 3 --trials 12
 """
 
