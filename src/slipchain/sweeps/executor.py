@@ -180,7 +180,7 @@ def default_workers() -> int:
 # Dask's setting against 798 us without it, bit for bit the same state. The local cluster's workers
 # therefore get glibc's defaults, as `slipchain run` does; a variable the user set in the driver's
 # environment is kept. On a cluster of your own, set ``distributed.nanny.pre-spawn-environ.
-# MALLOC_TRIM_THRESHOLD_`` to null in its Dask config (docs/guide) for the same speed.
+# MALLOC_TRIM_THRESHOLD_`` to null in its Dask config (docs/guide/sweeps.md) for the same speed.
 LOCAL_WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 
 
