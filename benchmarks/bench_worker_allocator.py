@@ -1,15 +1,16 @@
-"""Dask's worker allocator setting against glibc's defaults, on the tester's block (2026-12-06).
+"""Dask's worker allocator setting against glibc's defaults, on the tester's block and Fig. 6's 128 x 128 (2026-12-06).
 
 Dask's nanny starts every worker with MALLOC_TRIM_THRESHOLD_=65536 (``distributed.nanny.pre-spawn-environ``),
 which also fixes glibc's mmap threshold at 128 KiB: the slab's compiled steps, which allocate their FFTs'
 results every step (about 1.3 MB at 128 x 128 with the rubber), then map and fault in fresh pages every
 step. ``slipchain.sweeps.executor.dask_client`` starts its workers without it (LOCAL_WORKER_ENVIRON). This
-runs the same piece of a run (the tester's L x L block, theta = 0.05, mu_a = 0.8 released at once,
-dt = 2.5e-8 s, the implicit stepper as the tester presets run it; its first SAMPLES ms after WARM ms) on a
-worker of slipchain's local cluster and on one of Dask's default LocalCluster, one after the other, each
+runs the same piece of a run (a case of CASES on L x L: by default the tester's block, theta = 0.05, mu_a = 0.8
+released at once, dt = 2.5e-8 s, the implicit stepper as the tester presets run it; --samples ms after --warm ms)
+on a worker of slipchain's local cluster and on one of Dask's default LocalCluster, one after the other, each
 alone on its core, and prints the wall per base step of each and whether the states are bit-identical.
 
-    python benchmarks/bench_worker_allocator.py            # 128 x 128
+    python benchmarks/bench_worker_allocator.py            # the tester's block, 128 x 128
+    python benchmarks/bench_worker_allocator.py --L 128 --case tester fig6-slab fig6-chain2d --samples 2
     python benchmarks/bench_worker_allocator.py --L 64
 """
 

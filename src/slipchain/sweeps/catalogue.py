@@ -150,7 +150,7 @@ CATALOGUE: dict[str, Study] = {
                                "tester-128-long at theta = 1, 0.75 and theta = 0.2, 0.7 (64 x 64's held and runaway sides for all three seeds; seed 0)"),
     "tester-128-long-3": Study("study", 4, "4 of 4 run (seed 1 theta = 0.5 at 0.65 ran away, stopped at 0.541 s: 16 416 s; seed 0 theta = 0.05 at 0.85 ran away, stopped at 0.182 s: 23 291 s; seed 1 theta = 0.05 at 0.8 held, read at 0.8 s: 17 098 s; seed 0 theta = 0.5 at 0.6 held, read at 0.816 s: 12 234 s; one Intel Xeon core each beside other runs, the last two partly at glibc's allocator defaults)", "docs/tester-3d/index.md",
                                "tester-128-long stopped when decided (stop_at_runaway, stop_when_held): seed 1 at its weights, seed 0 at the other side of its brackets"),
-    "tester-128-long-4": Study("study", 5, "0 of 5 run (queued behind tester-128-long-3; about 2-4 core-hours a run at its pace)", "docs/tester-3d/index.md",
+    "tester-128-long-4": Study("study", 5, "0 of 5 run; theta = 0.5 (seed 1 at 0.6, seed 2 at 0.65) in flight since 2026-12-06 (one Intel Xeon core each, at glibc's allocator defaults; seed 1's first 0.37 s took 4 711 s): about 2-3 core-hours a run", "docs/tester-3d/index.md",
                                "tester-128-long-3's next runs: seed 1 theta = 0.5 at 0.6, seed 2 at the tightest pair (0.05 at 0.8, 0.5 at 0.65), seed 0 theta = 0.2 at 0.65 and theta = 1 at 0.85"),
     "tester-128-slower": Study("study", 8, "1 of 8 run (theta = 1 at 0.95: 5 423 s on one Zen 5 core; theta = 0.05 at 0.95 checkpointed at 1.45 s after 4 124 s)", "docs/tester-3d/index.md",
                                "tester-32-slower on the issue's 128 x 128 interface (seed 0)"),
