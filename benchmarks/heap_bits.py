@@ -4,8 +4,10 @@ Runs one piece of a run (``bench_worker_allocator.CASES``: TRIALS times in one p
 different set of live arrays of random sizes allocated before each trial, so that the piece's own arrays land
 elsewhere in the heap, and prints how many trials gave each hash of the state and the chunk's outputs. One hash:
 the piece's arithmetic does not follow the addresses. Found on 2026-12-06: the 2-D chains on 64 x 64 (implicit and
-adaptive) give a second hash in one trial of 12 (seed 3), in their positions and velocities; the 1-D chain, the 2-D
-chains at 16-48 squared, the slab and the tester's block give one (docs/performance.md, where the search so far is).
+adaptive) gave a second hash in one trial of 12 (seed 3), in their positions and velocities. Traced and fixed the
+same day (the stencil's neighbour indices unsigned: docs/performance.md, "The 2-D chains' bits followed the heap"):
+one hash in 12 of 12 at seeds 3, 4, 5 for both cases since; the 1-D chain, the 2-D chains at 16-48 squared, the slab
+and the tester's block gave one before too.
 
     python benchmarks/heap_bits.py --case fig6-chain2d --L 64 --seed 3 --trials 12
     python benchmarks/heap_bits.py --case chain2d-adaptive --L 64 --seed 3 --trials 12

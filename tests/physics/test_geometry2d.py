@@ -171,3 +171,44 @@ def test_array_code_agrees_with_the_numba_loop(geometry):
         assert np.max(np.abs(a.x.values - b.x.values)) < 1e-8 * np.max(np.abs(a.x.values))
         assert abs(a.attrs["mu_star"] / b.attrs["mu_star"] - 1) < 1e-8
         assert b.attrs["check_energy_balance_passed"] == 1
+
+
+def _placed(layout, n, k):
+    """``k`` read arrays and ``k`` written arrays of ``n`` doubles in one buffer: 'interleaved' puts each written
+    array right after a read array (within the wrapped range numba's negative-index handling adds past a read
+    array's end, where the vectorised loop's alias check once saw a conflict), 'written-first' puts every written
+    array before every read array (no conflict in either check)."""
+    buf = np.empty(2 * k * n)
+    blocks = [buf[j * n:(j + 1) * n] for j in range(2 * k)]
+    if layout == "interleaved":
+        return blocks[0::2], blocks[1::2]
+    return blocks[k:], blocks[:k]
+
+
+@pytest.mark.parametrize("kernel", ["explicit_forces_2d", "bulk_forces"])
+def test_chain2d_stencil_bits_do_not_follow_where_its_arrays_lie(kernel):
+    """The 2-D chains' stencil gives the same bits whatever lies after its arrays: with signed neighbour indices
+    the vectorised inner loop's runtime alias check also covered a wrapped range past each read array's end, so a
+    written array there sent the row to the scalar loop, which associates the sums otherwise (a 64 x 64 chain2d
+    run's last bits followed its worker's heap; docs/performance.md). Ly = 64: a row long enough to vectorise."""
+    from slipchain.engine.backends import cpu
+    from slipchain.engine.backends import viscoelastic as ve
+
+    ly, n = 64, 64 * 64
+    vals = np.random.default_rng(7).standard_normal((4, n)) * np.array([[1.0], [1e-3], [1.0], [1e-3]])
+    outs = {}
+    for layout in ("interleaved", "written-first"):
+        if kernel == "explicit_forces_2d":
+            rd, wr = _placed(layout, n, 4)
+            for a, v in zip(rd, vals):
+                a[:] = v
+            s = cpu._explicit_forces_2d(ly, *rd, *wr, 1.3, 0.7, 0.9, 0.1, 1.1, 0.6, 0.37, 0.2, 0.05, 1e-3, 2e-4)
+            outs[layout] = [w.copy() for w in wr] + [np.array([s])]
+        else:
+            rd, wr = _placed(layout, n, 2)
+            for a, v in zip(rd, vals[::2]):
+                a[:] = v
+            ve.bulk_forces(ly, *rd, *wr, 1.3, 0.7, 0.9, 1.1, 0.6)
+            outs[layout] = [w.copy() for w in wr]
+    for a, b in zip(outs["interleaved"], outs["written-first"]):
+        assert a.tobytes() == b.tobytes(), np.flatnonzero(a != b)[:8]

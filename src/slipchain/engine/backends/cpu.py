@@ -91,8 +91,12 @@ def _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
         for iy in range(ly):
             jp = base + (iy + 1 if iy + 1 < ly else 0)
             jm = base + (iy - 1 if iy > 0 else ly - 1)
-            block_update_2d(base + iy, ipx + iy, imx + iy, jp, jm, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
-                            KY, KLY, meta, drive, fconst, dtm, dtmL)
+            # unsigned indices, so that numba adds no negative-index wrap (i + n where i < 0): with it the vectorised
+            # loop's runtime alias check also spanned a wrapped range past each array's end, a false conflict whenever
+            # a written array lay there, which sent the row to the scalar loop (its sums associated otherwise): the
+            # 2-D chains' last bits followed the heap (docs/performance.md, "The 2-D chains' bits followed the heap")
+            block_update_2d(nb.uint64(base + iy), nb.uint64(ipx + iy), nb.uint64(imx + iy), nb.uint64(jp), nb.uint64(jm),
+                            xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive, fconst, dtm, dtmL)
     sx = 0.0
     for i in range(n):
         sx += Xr[i]

@@ -65,12 +65,15 @@ def bulk_forces(ly, gx, gX, fx, fX, K, KL, KT, KY, KLY):
         ipx = ((ix + 1) % lx) * ly
         imx = ((ix + lx - 1) % lx) * ly
         for iy in range(ly):
-            i = base + iy
-            jp = base + (iy + 1 if iy + 1 < ly else 0)
-            jm = base + (iy - 1 if iy > 0 else ly - 1)
+            # unsigned indices: no negative-index wrap, no false alias conflict (cpu._explicit_forces_2d says why)
+            i = nb.uint64(base + iy)
+            ip = nb.uint64(ipx + iy)
+            im = nb.uint64(imx + iy)
+            jp = nb.uint64(base + (iy + 1 if iy + 1 < ly else 0))
+            jm = nb.uint64(base + (iy - 1 if iy > 0 else ly - 1))
             t = KT * (gX[i] - gx[i])
-            fx[i] = K * (gx[ipx + iy] + gx[imx + iy] - 2.0 * gx[i]) + KY * (gx[jp] + gx[jm] - 2.0 * gx[i]) + t
-            fX[i] = KL * (gX[ipx + iy] + gX[imx + iy] - 2.0 * gX[i]) + KLY * (gX[jp] + gX[jm] - 2.0 * gX[i]) - t
+            fx[i] = K * (gx[ip] + gx[im] - 2.0 * gx[i]) + KY * (gx[jp] + gx[jm] - 2.0 * gx[i]) + t
+            fX[i] = KL * (gX[ip] + gX[im] - 2.0 * gX[i]) + KLY * (gX[jp] + gX[jm] - 2.0 * gX[i]) - t
 
 
 @nb.njit(fastmath=FASTMATH, error_model="numpy")
