@@ -214,17 +214,16 @@ def test_chain2d_stencil_bits_do_not_follow_where_its_arrays_lie(kernel):
         assert a.tobytes() == b.tobytes(), np.flatnonzero(a != b)[:8]
 
 
-def test_chain2d_stencils_vectorise_without_wrapped_alias_bounds():
+def test_chain2d_stencils_vectorise_without_wrapped_alias_bounds(monkeypatch):
     """The static side of the test above: in the IR of both stencils no vectorised loop's alias check takes a bound
     from a 1-D array's length (the wrapped range of a possibly negative index; benchmarks/alias_scan.py's rule, which
     flags the old ``_explicit_forces_2d`` by exactly its four read arrays)."""
-    import sys
     from pathlib import Path
 
     from slipchain.engine.backends import cpu
     from slipchain.engine.backends import viscoelastic as ve
 
-    sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "benchmarks"))  # undone after the test
     from alias_scan import wrapped_bounds
 
     n = 64 * 64
