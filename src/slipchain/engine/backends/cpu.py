@@ -78,6 +78,22 @@ def _explicit_forces(xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, meta, 
     return Kd * (n * drive - sx)
 
 
+@nb.njit(inline="always")
+def lattice_neighbours(ix, iy, lx, ly):
+    """Block (ix, iy) of the periodic (Lx, Ly) lattice of 'chain2d' (row-major, block ix*Ly + iy) and its
+    neighbours: (i, ip, im, jp, jm), ip/im along x, jp/jm along y, as unsigned indices.
+
+    Unsigned, so that numba adds no negative-index wrap (i + n where i < 0): with it the vectorised loop's runtime
+    alias check also spanned a wrapped range past each array's end, a false conflict whenever a written array lay
+    there, which sent the row to the scalar loop (its sums associated otherwise): the 2-D chains' last bits followed
+    the heap (docs/performance.md, "The 2-D chains' bits followed the heap"). Used by every 2-D stencil
+    (:func:`_explicit_forces_2d`, :func:`.viscoelastic.bulk_forces`).
+    """
+    base = ix * ly
+    return (nb.uint64(base + iy), nb.uint64(((ix + 1) % lx) * ly + iy), nb.uint64(((ix + lx - 1) % lx) * ly + iy),
+            nb.uint64(base + (iy + 1 if iy + 1 < ly else 0)), nb.uint64(base + (iy - 1 if iy > 0 else ly - 1)))
+
+
 @nb.njit(fastmath=FASTMATH, error_model="numpy")
 def _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive, fconst, dtm,
                         dtmL):
@@ -85,18 +101,10 @@ def _explicit_forces_2d(ly, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd,
     n = xr.size
     lx = n // ly
     for ix in range(lx):
-        base = ix * ly
-        ipx = ((ix + 1) % lx) * ly
-        imx = ((ix + lx - 1) % lx) * ly
         for iy in range(ly):
-            jp = base + (iy + 1 if iy + 1 < ly else 0)
-            jm = base + (iy - 1 if iy > 0 else ly - 1)
-            # unsigned indices, so that numba adds no negative-index wrap (i + n where i < 0): with it the vectorised
-            # loop's runtime alias check also spanned a wrapped range past each array's end, a false conflict whenever
-            # a written array lay there, which sent the row to the scalar loop (its sums associated otherwise): the
-            # 2-D chains' last bits followed the heap (docs/performance.md, "The 2-D chains' bits followed the heap")
-            block_update_2d(nb.uint64(base + iy), nb.uint64(ipx + iy), nb.uint64(imx + iy), nb.uint64(jp), nb.uint64(jm),
-                            xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta, drive, fconst, dtm, dtmL)
+            i, ip, im, jp, jm = lattice_neighbours(ix, iy, lx, ly)
+            block_update_2d(i, ip, im, jp, jm, xr, ur, Xr, Ur, un, Un, dampx, dampX, K, KL, KT, Kd, KY, KLY, meta,
+                            drive, fconst, dtm, dtmL)
     sx = 0.0
     for i in range(n):
         sx += Xr[i]

@@ -33,7 +33,7 @@ import numba as nb
 import numpy as np
 
 from ..scheme import BODY_ROWS, FASTMATH, P_DT, P_K, P_KD, P_KL, P_KLY, P_KT, P_KY, P_LAT, P_LY, P_M, P_META, P_ML, P_VD
-from .cpu import lattice_commit, lattice_explicit
+from .cpu import lattice_commit, lattice_explicit, lattice_neighbours
 from .spectral import body_commit, body_explicit
 
 
@@ -61,16 +61,8 @@ def bulk_forces(ly, gx, gX, fx, fX, K, KL, KT, KY, KLY):
     n = gx.size
     lx = n // ly
     for ix in range(lx):
-        base = ix * ly
-        ipx = ((ix + 1) % lx) * ly
-        imx = ((ix + lx - 1) % lx) * ly
         for iy in range(ly):
-            # unsigned indices: no negative-index wrap, no false alias conflict (cpu._explicit_forces_2d says why)
-            i = nb.uint64(base + iy)
-            ip = nb.uint64(ipx + iy)
-            im = nb.uint64(imx + iy)
-            jp = nb.uint64(base + (iy + 1 if iy + 1 < ly else 0))
-            jm = nb.uint64(base + (iy - 1 if iy > 0 else ly - 1))
+            i, ip, im, jp, jm = lattice_neighbours(ix, iy, lx, ly)  # unsigned: no false alias conflict (its docstring)
             t = KT * (gX[i] - gx[i])
             fx[i] = K * (gx[ip] + gx[im] - 2.0 * gx[i]) + KY * (gx[jp] + gx[jm] - 2.0 * gx[i]) + t
             fX[i] = KL * (gX[ip] + gX[im] - 2.0 * gX[i]) + KLY * (gX[jp] + gX[jm] - 2.0 * gX[i]) - t
