@@ -185,6 +185,22 @@ def _placed(layout, n, k):
     return blocks[k:], blocks[:k]
 
 
+@pytest.mark.parametrize("lx, ly", [(1, 1), (1, 5), (4, 1), (2, 2), (3, 7), (64, 64)])
+def test_lattice_neighbours_are_the_periodic_lattice_neighbours(lx, ly):
+    """The 2-D stencils' shared index helper against numpy's periodic shifts of the row-major (Lx, Ly) index grid
+    (block ix*Ly + iy; ip/im along x, jp/jm along y), and unsigned (the reason it exists: docs/performance.md)."""
+    from slipchain.engine.backends.cpu import lattice_neighbours
+
+    grid = np.arange(lx * ly).reshape(lx, ly)
+    want = [grid, np.roll(grid, -1, 0), np.roll(grid, 1, 0), np.roll(grid, -1, 1), np.roll(grid, 1, 1)]
+    for ix in range(lx):
+        for iy in range(ly):
+            got = lattice_neighbours(ix, iy, lx, ly)
+            assert [int(g) for g in got] == [int(w[ix, iy]) for w in want]
+    # unsigned in the compiled code (Python sees ints): numba's return type for int64 arguments
+    assert {str(sig.return_type) for sig in lattice_neighbours.nopython_signatures} == {"UniTuple(uint64 x 5)"}
+
+
 @pytest.mark.parametrize("kernel", ["explicit_forces_2d", "bulk_forces"])
 def test_chain2d_stencil_bits_do_not_follow_where_its_arrays_lie(kernel):
     """The 2-D chains' stencil gives the same bits whatever lies after its arrays: with signed neighbour indices
