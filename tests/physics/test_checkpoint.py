@@ -291,3 +291,35 @@ def test_contact_records_past_their_budget_are_merged_and_resume_bit_for_bit(tmp
     with monkeypatch.context() as m:
         m.setattr(observers, "record_cap", lambda nc, budget=None: 3)
         _same(merged, run(cfg, checkpoint=old))
+
+
+def test_checkpoint_keeps_its_pace_over_a_resume(tmp_path, monkeypatch):
+    """The checkpoint's pace (attributes pace_t_simulated, pace_wall_time_s: what `slipchain status` reads the
+    recent pace from) has one point per write, the last being the checkpoint's own simulated and wall time; a
+    resumed run keeps the crashed run's points and goes on from them (the wall time is summed over resumes),
+    keeping the last PACE_POINTS; recent_pace reads them back (ckpt.recent_pace)."""
+    cfg = CASES["fixed length"]
+    path = tmp_path / "run.ckpt.nc"
+    with monkeypatch.context() as m:
+        _crashed_run(m, cfg, path, 3)
+    a = ckpt.read_attrs(path)
+    t, w = np.atleast_1d(a["pace_t_simulated"]), np.atleast_1d(a["pace_wall_time_s"])
+    assert t.size == w.size == 3
+    assert t[-1] == a["t_simulated"] and w[-1] == a["wall_time_s"]
+    assert np.all(np.diff(t) > 0) and np.all(np.diff(w) > 0)
+    with monkeypatch.context() as m:
+        m.setattr(ckpt, "PACE_POINTS", 4)
+        run(cfg, checkpoint=path, checkpoint_every=0)
+    b = ckpt.read_attrs(path)
+    t2, w2 = np.atleast_1d(b["pace_t_simulated"]), np.atleast_1d(b["pace_wall_time_s"])
+    chunk = float(t[1] - t[0])
+    writes = int(round(float(b["t_simulated"]) / chunk))  # one write per chunk, the crashed run's three included
+    assert writes > 4 and t2.size == w2.size == 4
+    np.testing.assert_allclose(t2, chunk * np.arange(writes - 3, writes + 1), rtol=1e-12)
+    assert writes - 3 == 2  # the last four writes: the crashed run's last two, then the resumed run's
+    np.testing.assert_array_equal(w2[:2], w[1:])
+    assert w2[-1] == b["wall_time_s"] and np.all(np.diff(w2) > 0)
+    rate, over = ckpt.recent_pace(b, window=0.0)  # the last two writes
+    assert over == w2[-1] - w2[-2] and rate == pytest.approx(over / chunk, rel=1e-9)
+    rate, over = ckpt.recent_pace(b, window=1e9)  # no write that old: from the first kept one
+    assert over == w2[-1] - w2[0] and rate == pytest.approx(over / (t2[-1] - t2[0]), rel=1e-9)

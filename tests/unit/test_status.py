@@ -163,5 +163,31 @@ def test_store_status_says_where_the_stop_rules_decide_a_released_slab(tmp_path)
         hours = re.findall(r"t = ([0-9.e-]+) s is ([0-9.e-]+) h of wall away", said)
         assert [float(h[0]) for h in hours] == pytest.approx([start, 0.02], rel=1e-3), said
         assert [float(h[1]) for h in hours] == pytest.approx([start - t[-1], 0.02 - t[-1]], rel=0.03), said
+        assert "at its pace so far" in said
+        # given the recent pace from the checkpoint's last writes (here 7200 s of wall per simulated second over
+        # its last 30 min), the wait is read at that pace, not the mean
+        said = stop_rules(m.config, x, wall_time_s=3600.0 * t[-1], pace=(7200.0, 1800.0))
+        assert "at its pace over its last 30 min of wall (7,200 s a simulated second)" in said, said
+        hours = re.findall(r"t = ([0-9.e-]+) s is ([0-9.e-]+) h of wall away", said)
+        assert [float(h[1]) for h in hours] == pytest.approx([2 * (start - t[-1]), 2 * (0.02 - t[-1])], rel=0.03)
     chain = make_config(**IDENTICAL, dead_weight=0.5, t_ramp=1e-4, t_decide=2e-3, t_max=4e-3)
     assert stop_rules(chain, ruled["X_mean"].values) is None
+
+
+def test_recent_pace_reads_the_last_writes_that_span_its_window():
+    """engine.checkpoint.recent_pace: a run that went at 10 s of wall per simulated second, then at 1000 (a
+    released top ringing on fine steps after a quick start, say): over a window inside the slow stretch it
+    reads 1000, over one reaching back past the change the mean of the span, over one longer than the whole
+    record from the first kept write; two writes or none moved: None."""
+    from slipchain.engine.checkpoint import recent_pace
+
+    t = np.array([0.0, 1.0, 2.0, 3.0, 3.1, 3.2, 3.3])
+    w = np.array([0.0, 10.0, 20.0, 30.0, 130.0, 230.0, 330.0])
+    attrs = {"pace_t_simulated": t, "pace_wall_time_s": w}
+    assert recent_pace(attrs, window=150.0) == pytest.approx((1000.0, 200.0))
+    assert recent_pace(attrs, window=300.0) == pytest.approx((1000.0, 300.0))  # from the write 300 s back
+    assert recent_pace(attrs, window=305.0) == pytest.approx((310.0 / 1.3, 310.0))
+    assert recent_pace(attrs, window=1e6) == pytest.approx((100.0, 330.0))
+    assert recent_pace({"pace_t_simulated": t[:1], "pace_wall_time_s": w[:1]}) is None
+    assert recent_pace({"pace_t_simulated": [1.0, 1.0], "pace_wall_time_s": [5.0, 9.0]}) is None
+    assert recent_pace({}) is None  # a checkpoint written before the pace was kept

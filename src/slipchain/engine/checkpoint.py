@@ -16,7 +16,10 @@ stopped:
   pairwise; one running sum for a dead-weight run) with each record's first sample, samples and chunks,
   and the work sums;
 * the start values the result needs (<x> and the stored energy at the start), the wall time so far
-  and the simulated times of earlier resumes.
+  and the simulated times of earlier resumes;
+* the pace (attributes ``pace_t_simulated`` and ``pace_wall_time_s``: the simulated and the wall time at each of
+  the last :data:`PACE_POINTS` writes, over resumes), from which ``slipchain status`` reads how fast the run
+  goes now rather than on average (:func:`recent_pace`); not state, nothing in the run reads it.
 
 There is no random number generator in the time loop (the disorder is drawn from the seed when
 the system is built), so none is stored. The checkpoint is written only where this state is
@@ -51,6 +54,8 @@ FORMAT = 3  # bumped whenever the layout below changes; a checkpoint of another 
 READS = (1, 2, 3)  # formats this version reads: 1 lacks the bulk's state and the bulk's work (both zero then);
 # 1 and 2 lack the chunks per contact record (one record per chunk, or one running record: replayed)
 CHECKPOINT_EVERY = 60.0  # default wall-time seconds between checkpoints (slipchain run --checkpoint-every)
+PACE_POINTS = 64  # writes whose (simulated, wall) times a checkpoint keeps (attributes pace_*): the recent pace
+PACE_WINDOW = 1800.0  # wall s over which recent_pace reads the pace (the last writes that span at least this)
 # The batch's arrays; geometry, shape, the elastic kernel, the adaptive step's folds and control, the
 # preconditioner and the implicit scheme follow from the configs (Batch.pack).
 _BATCH_FIELDS = [f.name for f in fields(Batch)
@@ -89,6 +94,7 @@ class Checkpointer:
         self._last = time.monotonic()
         self._live: tuple | None = None
         self.writes = 0
+        self.pace: list[tuple[float, float]] = []  # (simulated s, wall s) at the last PACE_POINTS writes
 
     # --- writing ---------------------------------------------------------------------------
     def attach(self, systems: list[System], batch: Batch, controls: list[RowControl], recorder: Recorder,
@@ -107,10 +113,13 @@ class Checkpointer:
         if self._live is None:
             raise RuntimeError("Checkpointer.save before attach")
         systems, batch, controls, rec, x0, e0, wall0, wall_before, resumed_at, backend, interval = self._live
+        wall = wall_before + time.perf_counter() - wall0
+        pace = (self.pace + [(float(max(c.n for c in controls) * interval), wall)])[-PACE_POINTS:]
         try:
-            write_dataset(_to_dataset(systems, batch, controls, rec, x0, e0,
-                                      wall_before + time.perf_counter() - wall0, resumed_at, backend, interval), self.path)
+            write_dataset(_to_dataset(systems, batch, controls, rec, x0, e0, wall, resumed_at, backend, interval, pace),
+                          self.path)
             self.writes += 1
+            self.pace = pace
         except OSError as e:
             warnings.warn(f"could not write checkpoint {str(self.path)!r} ({e}); the run goes on and the previous "
                           "checkpoint, if any, is kept", RuntimeWarning, stacklevel=2)
@@ -175,12 +184,14 @@ class Checkpointer:
         recorder.works[...] = 0.0
         recorder.works[:, :works.shape[1]] = works  # format 1: no bulk work column (zero)
         resumed = [float(v) for v in np.atleast_1d(ds["resumed_at"].values)] if "resumed_at" in ds else []
+        self.pace = _pace(a)
         return Restored(x0=[float(v) for v in ds["x0_mean"].values], e0=[float(v) for v in ds["e0"].values],
                         wall=float(a["wall_time_s"]), resumed_at=resumed)
 
 
 def _to_dataset(systems, batch: Batch, controls: list[RowControl], rec: Recorder, x0, e0, wall: float,
-                resumed_at: list[float], backend: str, interval: float) -> xr.Dataset:
+                resumed_at: list[float], backend: str, interval: float,
+                pace: list[tuple[float, float]] = ()) -> xr.Dataset:
     data: dict[str, tuple] = {}
     for name in _BATCH_FIELDS:
         v = getattr(batch, name)
@@ -218,7 +229,36 @@ def _to_dataset(systems, batch: Batch, controls: list[RowControl], rec: Recorder
         "title": "slipchain run checkpoint (state between chunks; see slipchain.engine.checkpoint)",
         "checkpoint_format": FORMAT, "slipchain_version": __version__, "backend": backend,
         "wall_time_s": wall, "t_simulated": float(max(c.n for c in controls) * interval),
-        "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
+        "written": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "pace_t_simulated": np.array([p[0] for p in pace], dtype=float),
+        "pace_wall_time_s": np.array([p[1] for p in pace], dtype=float)})
+
+
+def _pace(attrs: dict) -> list[tuple[float, float]]:
+    """A checkpoint's (simulated s, wall s) at its last writes (none before this was kept, or where unreadable)."""
+    try:
+        t = np.atleast_1d(np.asarray(attrs["pace_t_simulated"], dtype=float))
+        w = np.atleast_1d(np.asarray(attrs["pace_wall_time_s"], dtype=float))
+    except (KeyError, ValueError, TypeError):
+        return []
+    return [(float(a), float(b)) for a, b in zip(t, w)] if t.shape == w.shape else []
+
+
+def recent_pace(attrs: dict, window: float = PACE_WINDOW) -> tuple[float, float] | None:
+    """The run's recent pace from a checkpoint's attributes: (wall s per simulated s, wall s it is read over),
+    from its last write back to the latest earlier write at least ``window`` wall seconds before it (or its
+    first kept write, if none is that old); None where fewer than two writes are kept or the simulated time did
+    not move between them. A run's pace changes as its slip does (a released top rings on fine steps, then
+    creeps on long ones), so this says more of what is ahead than the mean over the whole run."""
+    pace = _pace(attrs)
+    if len(pace) < 2:
+        return None
+    t1, w1 = pace[-1]
+    older = [p for p in pace[:-1] if p[1] <= w1 - window]
+    t0, w0 = older[-1] if older else pace[0]
+    if not t1 > t0:
+        return None
+    return (w1 - w0) / (t1 - t0), w1 - w0
 
 
 def _cat(parts: list[np.ndarray]) -> np.ndarray:
@@ -298,5 +338,5 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
     return attrs, rows
 
 
-__all__ = ["CHECKPOINT_EVERY", "RECENT_WINDOW", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored",
-           "checkpoint_rows", "simulated_time"]
+__all__ = ["CHECKPOINT_EVERY", "PACE_POINTS", "PACE_WINDOW", "RECENT_WINDOW", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored",
+           "checkpoint_rows", "recent_pace", "simulated_time"]

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.checkpoint import CheckpointError, checkpoint_rows
+from ..engine.checkpoint import CheckpointError, checkpoint_rows, recent_pace
 from ..engine.control import replay_decision
 from ..results.schema import Status
 from .definition import Member, SweepError
@@ -133,19 +133,22 @@ def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> Me
         t = row.samples_done * float(m.config.output_interval)
         return MemberStatus(m.id, m.label(), IN_FLIGHT, None, None, row.message, t, t_max,
                             _float(attrs.get("wall_time_s")), attrs.get("written"), row.velocity,
-                            stop_rules(m.config, row.X_mean, _float(attrs.get("wall_time_s"))))
+                            stop_rules(m.config, row.X_mean, _float(attrs.get("wall_time_s")), recent_pace(attrs)))
     return MemberStatus(m.id, m.label(), PENDING, None, None, "", None, t_max, None, None, None)
 
 
-def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None) -> str | None:
+def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None,
+               pace: tuple[float, float] | None = None) -> str | None:
     """What the stop rules of a released slab (configs ``stop_at_runaway`` and ``stop_when_held``, both on; the
     run's own ``t_decide``) say of its record <X>(t) so far (:func:`~slipchain.engine.control.replay_decision`):
     where they stop it and its status there (runaway; no-steady with a "held" reason; ok), or that they have not
     stopped it yet; None for any other run (no dead weight, no ``t_decide``, not the slab). For a run started
     without them: how far it would have had to go. Not decided yet, it adds what the rules read so far (the top's
     mean velocity over its last two ringing periods against their bounds), from when each can stop the run, and,
-    given the run's wall time so far (``wall_time_s``), how much more wall time the run needs to get there at its
-    mean pace so far (an estimate: a run's pace changes as its slip does)."""
+    given the run's recent pace (``pace``: wall s per simulated s and the wall s it was read over, from the
+    checkpoint's last writes, :func:`~slipchain.engine.checkpoint.recent_pace`) or else its wall time so far
+    (``wall_time_s``, its mean pace), how much more wall time the run needs to get there (an estimate: a run's
+    pace changes as its slip does)."""
     from ..results.schema import (RUNAWAY_RISE, _beyond_branch, _period_velocities, branch_scale, dead_weight_status,
                                   rules_start)
 
@@ -170,10 +173,17 @@ def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None) -> str
     runaway_from, held_from = start, max(start, float(c.t_decide))
     out += f"; the runaway rule reads from t = {runaway_from:.4g} s, the held rule from t = {held_from:.4g} s"
     ahead = [x for x in (runaway_from, held_from) if x > t]
-    if wall_time_s and ahead:
-        pace = wall_time_s / t
-        out += " (at its pace so far, " + " and ".join(
-            f"t = {x:.4g} s is {(x - t) * pace / 3600.0:.2g} h of wall away" for x in dict.fromkeys(ahead)) + ")"
+    if pace is not None:
+        rate, over = pace
+        span = f"{over / 60.0:.0f} min" if over >= 120.0 else f"{over:.0f} s"
+        said = f"at its pace over its last {span} of wall ({rate:,.0f} s a simulated second), "
+    elif wall_time_s:
+        rate, said = wall_time_s / t, "at its pace so far, "
+    else:
+        return out
+    if ahead:
+        out += f" ({said}" + " and ".join(
+            f"t = {x:.4g} s is {(x - t) * rate / 3600.0:.2g} h of wall away" for x in dict.fromkeys(ahead)) + ")"
     return out
 
 
