@@ -154,7 +154,7 @@ CATALOGUE: dict[str, Study] = {
                                "tester-128-long-3's next runs: seed 1 theta = 0.5 at 0.6, seed 2 at the tightest pair (0.05 at 0.8, 0.5 at 0.65), seed 0 theta = 0.2 at 0.65 and theta = 1 at 0.85"),
     "tester-128-long-5": Study("study", 10, "1 of 10 done (seed 1's theta = 0.05 ran away at 0.85, 7 240 s of wall on one core), 9 running from 2026-12-06: about 2-3 core-hours a run at glibc's allocator defaults (tester-128-long-4), about 21 core-hours left", "docs/tester-3d/index.md",
                                "tester-128-long-4's next runs, whatever it says: seed 2 theta = 0.5 at 0.6, seed 1 theta = 0.05 at 0.85, seeds 1 and 2 at theta = 0.2 (0.65, 0.7) and theta = 1 (0.75, 0.85)"),
-    "tester-128-long-6": Study("study", 1, "started 2026-12-06, not finished: about 2-4 core-hours", "docs/tester-3d/index.md",
+    "tester-128-long-6": Study("study", 1, "done: seed 2's theta = 0.05 ran away at 0.85 (6 589 s of wall on one core, 2026-12-06)", "docs/tester-3d/index.md",
                                "seed 2's theta = 0.05 at 0.85, the other side of its held run at 0.8 (tester-128-long-4)"),
     "tester-128-slower": Study("study", 8, "1 of 8 run (theta = 1 at 0.95: 5 423 s on one Zen 5 core; theta = 0.05 at 0.95 checkpointed at 1.45 s after 4 124 s)", "docs/tester-3d/index.md",
                                "tester-32-slower on the issue's 128 x 128 interface (seed 0)"),
