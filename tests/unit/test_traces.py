@@ -261,3 +261,46 @@ def test_redecide_replays_the_automatic_length_as_a_run_with_that_t_decide(tmp_p
     plain = table[table["t_decide_replay"] == 1e-3].reset_index(drop=True)
     assert ruled["t_stop"].tolist() == plain["t_stop"].tolist() and ruled["status_replay"].tolist() == plain["status_replay"].tolist()
     assert "replayed with stop_at_runaway with stop_when_held on 2 runs" in r.stdout.replace("\n", " ")
+
+
+def test_traces_read_a_run_the_stop_rules_decide_on_its_checkpoint(tmp_path):
+    """velocity_traces(..., checkpoints=True): a released 4 x 4 slab (tests/unit/test_status.py's) run without the
+    stop rules and checkpointed, not stored, enters the traces and the brackets as the same run made with the rules
+    on: its record, bit for bit, up to where they stop it, their status and the outcome read from it; without
+    the option the store holds no run and is refused; one member stored and the other only checkpointed, each is
+    read once."""
+    from slipchain.analysis.traces import velocity_traces
+    from slipchain.sweeps.definition import SweepError
+    from slipchain.sweeps.store import Store
+
+    release = dict(geometry="slab", N=4, Ly=4, N_L=50, theta=1.0, delta=0.0, epsilon=1.0, start="rest",
+                   top_mass=1e-6, eta_c=1e5, t_ramp=1e-5, t_decide=0.02, t_max=0.03, output_interval=2e-5)
+    sweep = make_sweep({"name": "slab", "base": {**release, "dead_weight": 0.3}, "grid": {"dead_weight": [0.3, 0.9]}})
+    st = Store.open(tmp_path / "s", sweep)
+    for m in sweep.members:
+        run(m.config, checkpoint=st.checkpoint_path([m]))
+    with pytest.raises(SweepError, match="holds no completed run"):
+        velocity_traces([tmp_path / "s"], 1e-3)
+    frame, onsets, _ = velocity_traces([tmp_path / "s"], 1e-3, checkpoints=True)
+    assert sorted(onsets["mu_a"]) == [0.3, 0.9] and set(onsets["source"]) == {"checkpoint"}
+    ruled = {m.id: run(m.config.model_copy(update={"stop_at_runaway": True, "stop_when_held": True}))
+             for m in sweep.members}
+    for m in sweep.members:
+        row = onsets[onsets["member_id"] == m.id].iloc[0]
+        r = ruled[m.id]
+        assert row["status"] == r.attrs["velocity_status"]
+        want = run_outcome(m.config, r.attrs["velocity_status"], r["time"].values, r["X_mean"].values)
+        assert (row["outcome"], row["v_end"]) == want
+        got = frame[frame["member_id"] == m.id]
+        t, v = window_velocity(r["time"].values, r["X_mean"].values, 1e-3)
+        np.testing.assert_array_equal(got["t"].values, t)
+        np.testing.assert_array_equal(got["v"].values, v)
+    assert onsets.set_index("mu_a").loc[0.9, "outcome"] == "runaway"
+    low = onsets.set_index("mu_a").loc[0.3, "outcome"]  # over 0.02 s the record still holds the release's overshoot
+    b = protocol_brackets(onsets)
+    assert (b["lo"].iloc[0], b["hi"].iloc[0]) == (0.3 if low in ("steady", "held") else 0.0, 0.9)
+    # the held member stored (as a sweep would): read once, from the store
+    held = next(m for m in sweep.members if m.config.dead_weight == 0.3)
+    st.write_member(held, ruled[held.id])
+    _, onsets, _ = velocity_traces([tmp_path / "s"], 1e-3, checkpoints=True)
+    assert sorted(zip(onsets["mu_a"], onsets["source"])) == [(0.3, "member"), (0.9, "checkpoint")]

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import xarray as xr
 
 from ..results.schema import branch_scale  # v0 10**delta, the scale of every threshold here
 
@@ -206,9 +207,10 @@ def loading_rate(cfg) -> float:
     return float(f"{cfg.dead_weight / ramp:.4g}") if ramp and cfg.dead_weight else float("nan")
 
 
-def _runs(stores: list[str | os.PathLike]):
-    """(store name, member id, config, dataset) of every completed run of the stores; SweepError for a
-    store that is not one, holds no completed run, or a run without a dead weight."""
+def _runs(stores: list[str | os.PathLike], checkpoints: bool = False):
+    """(store name, member id, config, dataset) of every completed run of the stores, and with ``checkpoints``
+    of every run not stored yet whose checkpointed record the stop rules decide (:func:`_decided_checkpoints`);
+    SweepError for a store that is not one, holds no such run, or a run without a dead weight."""
     from ..model.config import config_from_toml
     from ..sweeps.definition import SweepError
     from ..sweeps.store import Store
@@ -216,8 +218,11 @@ def _runs(stores: list[str | os.PathLike]):
     for store in stores:
         st = Store.open(store)
         done = st.completed_ids()
-        if not done:
-            raise SweepError(f"store {os.fspath(store)!r} holds no completed run; expected a dead-weight sweep's store")
+        decided = list(_decided_checkpoints(st, done)) if checkpoints else []
+        if not done and not decided:
+            raise SweepError(f"store {os.fspath(store)!r} holds no completed run"
+                             + (" nor a checkpointed one that the stop rules decide" if checkpoints else "")
+                             + "; expected a dead-weight sweep's store")
         for m in st.sweep.members:
             if m.id not in done:
                 continue
@@ -227,12 +232,57 @@ def _runs(stores: list[str | os.PathLike]):
                 raise SweepError(f"store {os.fspath(store)!r}: member {m.id} is not a dead-weight run (dead_weight = "
                                  f"{cfg.dead_weight!r}); expected a sweep of dead-weight runs (e.g. presets/tester-16.toml)")
             yield Path(store).name, m.id, cfg, ds
+        for mid, cfg, ds in decided:
+            yield Path(store).name, mid, cfg, ds
 
 
-def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
-    """Every completed run of dead-weight sweep stores: its windowed velocities (:func:`window_velocity`;
+def _decided_checkpoints(st, done: set[str]):
+    """(member id, config, dataset) of each run of store ``st`` not in ``done`` whose checkpoint holds a record
+    that the stop rules (``stop_at_runaway`` and ``stop_when_held`` on, the run's own ``t_decide``) decide, as
+    ``slipchain status`` reads it (:func:`slipchain.sweeps.status.stop_rules`): the record up to that decision,
+    which is the record of the same run made with the rules on (they do not change the dynamics before they stop
+    it), with the status they give it (attribute ``velocity_status``) and ``source = "checkpoint"``. A released
+    slab only (the runs the rules are for); an unreadable checkpoint is left out, as status reports it."""
+    from ..engine import scheme as S
+    from ..engine.checkpoint import CheckpointError, checkpoint_records
+    from ..engine.control import replay_decision
+    from ..results.schema import dead_weight_status
+    from ..sweeps.store import CHECKPOINTS
+
+    by_config = {m.config.to_toml(): m for m in st.sweep.members if m.id not in done}
+    for ck in sorted((st.path / CHECKPOINTS).glob("*.nc")):
+        if ck.name.startswith("."):  # a write in progress
+            continue
+        try:
+            records = checkpoint_records(ck)
+        except CheckpointError:
+            continue
+        for toml, samples in records:
+            m = by_config.get(toml)
+            if m is None or samples.shape[0] < 2:
+                continue
+            cfg = m.config
+            if cfg.dead_weight is None or cfg.t_decide is None or cfg.geometry != "slab":
+                continue
+            ruled = cfg.model_copy(update={"stop_at_runaway": True, "stop_when_held": True})
+            n = replay_decision(ruled, samples[:, S.O_XUMEAN])
+            if n >= samples.shape[0]:  # not decided on the record so far
+                continue
+            time = (np.arange(n) + 1) * (cfg.sample_steps * cfg.dt)  # the run's own sample times (engine.simulate)
+            status, reason, _ = dead_weight_status(ruled, time, samples[:n, S.O_XUMEAN])
+            ds = xr.Dataset({"X_mean": ("time", samples[:n, S.O_XUMEAN]), "x_mean": ("time", samples[:n, S.O_XMEAN])},
+                            coords={"time": time},
+                            attrs={"velocity_status": status, "velocity_reason": reason, "source": "checkpoint"})
+            yield m.id, cfg, ds
+
+
+def velocity_traces(stores: list[str | os.PathLike], window: float,
+                    checkpoints: bool = False) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """Every completed run of dead-weight sweep stores (with ``checkpoints`` also every run not stored yet that the
+    stop rules decide on its checkpointed record, :func:`_decided_checkpoints`): its windowed velocities (:func:`window_velocity`;
     columns store, member_id, N, temperature, eta_c, theta, seed, mu_a, t_ramp, rate (:func:`loading_rate`),
-    t_decide, status (the tester's classification the run recorded), t (s), v (m/s)) and, one row per run
+    t_decide, status (the tester's classification the run recorded), source ("member", or "checkpoint"), t (s),
+    v (m/s)) and, one row per run
     with the same identifying columns, its outcome and end velocity (:func:`run_outcome`: ``outcome``,
     ``v_end``), the tester's steady velocity and its SE where it slid steadily, and its runaway onset
     (:func:`runaway_onset`); and the rising branch its ramp traced (:func:`ramp_branch`: t, mu, v, with the
@@ -242,10 +292,11 @@ def velocity_traces(stores: list[str | os.PathLike], window: float) -> tuple[pd.
     if not (isinstance(window, (int, float)) and np.isfinite(window) and window > 0):
         raise ValueError(f"window has value {window!r}; expected a positive number of seconds (e.g. 0.02)")
     traces, onsets, branches = [], [], []
-    for store, mid, cfg, ds in _runs(stores):
+    for store, mid, cfg, ds in _runs(stores, checkpoints):
         who = {"store": store, "member_id": mid, "N": cfg.N, "temperature": cfg.temperature, "eta_c": cfg.eta_c, "theta": cfg.theta,
                "seed": cfg.seed, "mu_a": cfg.dead_weight, "t_ramp": cfg.t_ramp, "rate": loading_rate(cfg),
-               "t_decide": cfg.t_decide, "status": ds.attrs.get("velocity_status", "")}
+               "t_decide": cfg.t_decide, "status": ds.attrs.get("velocity_status", ""),
+               "source": ds.attrs.get("source", "member")}
         time, x = ds["time"].values, ds["X_mean"].values
         t, v = window_velocity(time, x, window)
         traces.append(pd.DataFrame({**who, "t": t, "v": v}))

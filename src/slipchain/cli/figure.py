@@ -181,6 +181,7 @@ def traces(
     redecide: Annotated[list[float], typer.Option("--redecide", help="Replay each run's automatic length as if its t_decide had been this many seconds (repeat it for several) and say whether each run's outcome stays on its side of mu_max (redecide.csv).")] = [],  # noqa: B006
     stop_at_runaway: Annotated[bool, typer.Option("--stop-at-runaway", help="With --redecide: replay with config stop_at_runaway on (a released runaway on the slab stopped over its top's last two ringing periods).")] = False,
     stop_when_held: Annotated[bool, typer.Option("--stop-when-held", help="With --redecide: replay with config stop_when_held on (a released slab stopped once its top is back on the rising branch for good).")] = False,
+    checkpoints: Annotated[bool, typer.Option("--checkpoints", help="Also read the runs not stored yet whose checkpointed records the stop rules (stop_at_runaway, stop_when_held) decide, as `slipchain status` reads them (source 'checkpoint' in the CSVs).")] = False,
 ) -> None:
     """The top's velocity against time per run, one panel per theta; mu_max from where slowly loaded runs run away, and each protocol's bracket from its steady, held and runaway weights; traces.csv, onsets.csv, mu_max.csv, brackets.csv (with --redecide, redecide.csv)."""
     if not window > 0:
@@ -192,7 +193,7 @@ def traces(
         if on and not redecide:
             fail(f"{flag} without --redecide: expected --redecide T (the t_decide to replay it at)")
     try:
-        paths, lines = _figures().traces(store, out_dir, window, redecide, stop_at_runaway, stop_when_held)
+        paths, lines = _figures().traces(store, out_dir, window, redecide, stop_at_runaway, stop_when_held, checkpoints)
     except SweepError as e:
         fail(str(e))
     wrote(paths)

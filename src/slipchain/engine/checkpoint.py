@@ -338,5 +338,20 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
     return attrs, rows
 
 
+def checkpoint_records(path: str | Path) -> list[tuple[str, np.ndarray]]:
+    """Each run's config TOML and its record so far (output samples from the first, columns of
+    :mod:`~slipchain.engine.scheme`'s ``O_*``: mean f_d, <x>, <X>) from a checkpoint, reading nothing else (for
+    ``slipchain figure traces --checkpoints``: a run the stop rules decide on its record, read before it is
+    stored). Raises :class:`CheckpointError` for a file that is not a readable checkpoint."""
+    from ..results.io import ENGINE
+
+    try:
+        with xr.open_dataset(path, engine=ENGINE) as ds:
+            configs = [str(c) for c in np.atleast_1d(ds["config"].values)]
+            return [(c, np.asarray(ds[f"rec_samples_{r}"].values, dtype=float)) for r, c in enumerate(configs)]
+    except Exception as e:  # noqa: BLE001 - h5py's OSError, xarray's ValueError, a KeyError: not a whole checkpoint
+        raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
+
+
 __all__ = ["CHECKPOINT_EVERY", "PACE_POINTS", "PACE_WINDOW", "RECENT_WINDOW", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored",
-           "checkpoint_rows", "recent_pace", "simulated_time"]
+           "checkpoint_records", "checkpoint_rows", "recent_pace", "simulated_time"]

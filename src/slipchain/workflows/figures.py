@@ -136,7 +136,7 @@ def dead_weight(store: str | os.PathLike, out: str | os.PathLike) -> list[Path]:
 
 def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: float,
            redecide: list[float] | tuple[float, ...] = (), stop_at_runaway: bool = False,
-           stop_when_held: bool = False) -> tuple[list[Path], list[str]]:
+           stop_when_held: bool = False, checkpoints: bool = False) -> tuple[list[Path], list[str]]:
     """The top's velocity against time of every run of dead-weight stores, over windows of ``window`` s,
     with each run's outcome and each runaway's onset (:mod:`slipchain.analysis.traces`): the figure,
     traces.csv (one row per window), onsets.csv (one row per run), mu_max.csv
@@ -148,13 +148,15 @@ def traces(stores: list[str | os.PathLike], out: str | os.PathLike, window: floa
     :func:`~slipchain.analysis.traces.branch_summary`); with ``redecide`` (seconds), each run's automatic length
     replayed at each of those t_decide (:func:`~slipchain.analysis.traces.redecide`: redecide.csv; with
     ``stop_at_runaway`` or ``stop_when_held``, with that config on: a released runaway, or a held run, stopped over its
-    top's ringing periods); returns the
+    top's ringing periods); with ``checkpoints``, also the runs not stored yet that the stop rules decide on their
+    checkpointed records (their rows' ``source`` "checkpoint"; :func:`~slipchain.analysis.traces.velocity_traces`),
+    so a bracket can count a run read by ``slipchain status`` before it is stored; returns the
     paths, a line on that check, one line per group of mu_max.csv, one per bracket and one per replayed t_decide."""
     from ..analysis.traces import branch_check, branch_summary, onset_summary, protocol_brackets, velocity_traces
     from ..analysis.traces import redecide as replay
     from ..plots.dead_weight import plot_branches, plot_velocity_traces
 
-    frame, onsets, branch = velocity_traces(stores, window)
+    frame, onsets, branch = velocity_traces(stores, window, checkpoints)
     summary = onset_summary(onsets)
     brackets = protocol_brackets(onsets)
     check = branch_check(branch, onsets[onsets["outcome"] == "steady"])
