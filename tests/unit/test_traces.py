@@ -289,6 +289,7 @@ def test_traces_read_a_run_the_stop_rules_decide_on_its_checkpoint(tmp_path):
         row = onsets[onsets["member_id"] == m.id].iloc[0]
         r = ruled[m.id]
         assert row["status"] == r.attrs["velocity_status"]
+        np.testing.assert_array_equal([row["velocity"], row["velocity_sem"]], [r.attrs["velocity"], r.attrs["velocity_sem"]])
         want = run_outcome(m.config, r.attrs["velocity_status"], r["time"].values, r["X_mean"].values)
         assert (row["outcome"], row["v_end"]) == want
         got = frame[frame["member_id"] == m.id]

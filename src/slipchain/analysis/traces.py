@@ -247,6 +247,7 @@ def _decided_checkpoints(st, done: set[str]):
     from ..engine.checkpoint import CheckpointError, checkpoint_records
     from ..engine.control import replay_decision
     from ..results.schema import dead_weight_status
+    from ..results.velocity import VelocityStatus
     from ..sweeps.store import CHECKPOINTS
 
     by_config = {m.config.to_toml(): m for m in st.sweep.members if m.id not in done}
@@ -269,10 +270,12 @@ def _decided_checkpoints(st, done: set[str]):
             if n >= samples.shape[0]:  # not decided on the record so far
                 continue
             time = (np.arange(n) + 1) * (cfg.sample_steps * cfg.dt)  # the run's own sample times (engine.simulate)
-            status, reason, _ = dead_weight_status(ruled, time, samples[:n, S.O_XUMEAN])
+            status, reason, fit = dead_weight_status(ruled, time, samples[:n, S.O_XUMEAN])
+            ok = status == VelocityStatus.OK  # the tester's velocity and SE where it slid steadily (results.schema.dead_weight_attrs)
             ds = xr.Dataset({"X_mean": ("time", samples[:n, S.O_XUMEAN]), "x_mean": ("time", samples[:n, S.O_XMEAN])},
                             coords={"time": time},
-                            attrs={"velocity_status": status, "velocity_reason": reason, "source": "checkpoint"})
+                            attrs={"velocity_status": status, "velocity_reason": reason, "source": "checkpoint",
+                                   "velocity": fit.velocity if ok else np.nan, "velocity_sem": fit.sem if ok else np.nan})
             yield m.id, cfg, ds
 
 
