@@ -160,3 +160,21 @@ def store_of_runs():
         return st
 
     return make
+
+
+@pytest.fixture
+def checkpointed_releases(tmp_path):
+    """A store of two released 4 x 4 slabs (weights 0.3 and 0.9; tests/physics/test_dead_weight.py's RELEASE) run
+    without the stop rules and checkpointed, not stored, as a sweep leaves a run in flight: (store path, sweep,
+    Store). Over 0.03 s the rules would call 0.9 a runaway and 0.3 held."""
+    from slipchain import run
+    from slipchain.sweeps.definition import make_sweep
+    from slipchain.sweeps.store import Store
+
+    release = dict(geometry="slab", N=4, Ly=4, N_L=50, theta=1.0, delta=0.0, epsilon=1.0, start="rest",
+                   top_mass=1e-6, eta_c=1e5, t_ramp=1e-5, t_decide=0.02, t_max=0.03, output_interval=2e-5)
+    sweep = make_sweep({"name": "slab", "base": {**release, "dead_weight": 0.3}, "grid": {"dead_weight": [0.3, 0.9]}})
+    st = Store.open(tmp_path / "s", sweep)
+    for m in sweep.members:
+        run(m.config, checkpoint=st.checkpoint_path([m]))
+    return tmp_path / "s", sweep, st

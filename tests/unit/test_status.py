@@ -118,7 +118,7 @@ def test_cli_status_table_json_and_bad_store(tmp_path, slipchain_cli, store_of_r
     assert sorted(p.name for p in (tmp_path / "empty").iterdir()) == []  # nothing written
 
 
-def test_store_status_says_where_the_stop_rules_decide_a_released_slab(tmp_path):
+def test_store_status_says_where_the_stop_rules_decide_a_released_slab(tmp_path, checkpointed_releases):
     """A released 4 x 4 slab (tests/physics/test_dead_weight.py's RELEASE) run without the stop rules and
     checkpointed, not stored: the status says where stop_at_runaway and stop_when_held decide its record so far
     (sweeps.status.stop_rules), the time and verdict of the same run made with them on; a chain's run says
@@ -127,12 +127,7 @@ def test_store_status_says_where_the_stop_rules_decide_a_released_slab(tmp_path)
     from slipchain.results.schema import rules_start
     from slipchain.sweeps.status import stop_rules
 
-    release = dict(geometry="slab", N=4, Ly=4, N_L=50, theta=1.0, delta=0.0, epsilon=1.0, start="rest",
-                   top_mass=1e-6, eta_c=1e5, t_ramp=1e-5, t_decide=0.02, t_max=0.03, output_interval=2e-5)
-    sweep = make_sweep({"name": "slab", "base": {**release, "dead_weight": 0.3}, "grid": {"dead_weight": [0.3, 0.9]}})
-    st = Store.open(tmp_path / "s", sweep)
-    for m in sweep.members:
-        run(m.config, checkpoint=st.checkpoint_path([m]))
+    _, sweep, _ = checkpointed_releases
     by = {m.id: m for m in store_status(tmp_path / "s").members}
     for m in sweep.members:
         ruled = run(m.config.model_copy(update={"stop_at_runaway": True, "stop_when_held": True}))

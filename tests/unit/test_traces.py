@@ -263,7 +263,7 @@ def test_redecide_replays_the_automatic_length_as_a_run_with_that_t_decide(tmp_p
     assert "replayed with stop_at_runaway with stop_when_held on 2 runs" in r.stdout.replace("\n", " ")
 
 
-def test_traces_read_a_run_the_stop_rules_decide_on_its_checkpoint(tmp_path):
+def test_traces_read_a_run_the_stop_rules_decide_on_its_checkpoint(tmp_path, checkpointed_releases):
     """velocity_traces(..., checkpoints=True): a released 4 x 4 slab (tests/unit/test_status.py's) run without the
     stop rules and checkpointed, not stored, enters the traces and the brackets as the same run made with the rules
     on: its record, bit for bit, up to where they stop it, their status and the outcome read from it; without
@@ -271,14 +271,8 @@ def test_traces_read_a_run_the_stop_rules_decide_on_its_checkpoint(tmp_path):
     read once."""
     from slipchain.analysis.traces import velocity_traces
     from slipchain.sweeps.definition import SweepError
-    from slipchain.sweeps.store import Store
 
-    release = dict(geometry="slab", N=4, Ly=4, N_L=50, theta=1.0, delta=0.0, epsilon=1.0, start="rest",
-                   top_mass=1e-6, eta_c=1e5, t_ramp=1e-5, t_decide=0.02, t_max=0.03, output_interval=2e-5)
-    sweep = make_sweep({"name": "slab", "base": {**release, "dead_weight": 0.3}, "grid": {"dead_weight": [0.3, 0.9]}})
-    st = Store.open(tmp_path / "s", sweep)
-    for m in sweep.members:
-        run(m.config, checkpoint=st.checkpoint_path([m]))
+    _, sweep, st = checkpointed_releases
     with pytest.raises(SweepError, match="holds no completed run"):
         velocity_traces([tmp_path / "s"], 1e-3)
     frame, onsets, _ = velocity_traces([tmp_path / "s"], 1e-3, checkpoints=True)
