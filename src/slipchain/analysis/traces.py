@@ -239,44 +239,30 @@ def _runs(stores: list[str | os.PathLike], checkpoints: bool = False):
 def _decided_checkpoints(st, done: set[str]):
     """(member id, config, dataset) of each run of store ``st`` not in ``done`` whose checkpoint holds a record
     that the stop rules (``stop_at_runaway`` and ``stop_when_held`` on, the run's own ``t_decide``) decide, as
-    ``slipchain status`` reads it (:func:`slipchain.sweeps.status.stop_rules`): the record up to that decision,
-    which is the record of the same run made with the rules on (they do not change the dynamics before they stop
-    it), with the status they give it (attribute ``velocity_status``) and ``source = "checkpoint"``. A released
-    slab only (the runs the rules are for); an unreadable checkpoint is left out, as status reports it."""
-    from ..engine import scheme as S
-    from ..engine.checkpoint import CheckpointError, checkpoint_records
-    from ..engine.control import replay_decision
-    from ..results.schema import dead_weight_status
+    ``slipchain status`` reads it (:func:`slipchain.sweeps.status.checkpointed`,
+    :func:`slipchain.engine.control.rules_decision`): the record up to that decision, which is the record of the
+    same run made with the rules on (they do not change the dynamics before they stop it), with the status they
+    give it (attribute ``velocity_status``) and ``source = "checkpoint"``. A released slab only (the runs the
+    rules are for); an unreadable checkpoint is left out, as status reports it."""
+    from ..engine.control import rules_decision
     from ..results.velocity import VelocityStatus
-    from ..sweeps.store import CHECKPOINTS
+    from ..sweeps.status import checkpointed
 
-    by_config = {m.config.to_toml(): m for m in st.sweep.members if m.id not in done}
-    for ck in sorted((st.path / CHECKPOINTS).glob("*.nc")):
-        if ck.name.startswith("."):  # a write in progress
+    flying, _, _ = checkpointed(st)
+    for m in st.sweep.members:
+        if m.id in done or m.id not in flying:
             continue
-        try:
-            records = checkpoint_records(ck)
-        except CheckpointError:
+        row, _ = flying[m.id]
+        decision = rules_decision(m.config, row.X_mean)
+        if decision is None or decision.verdict is None:  # not the released slab, or not decided on the record so far
             continue
-        for toml, samples in records:
-            m = by_config.get(toml)
-            if m is None or samples.shape[0] < 2:
-                continue
-            cfg = m.config
-            if cfg.dead_weight is None or cfg.t_decide is None or cfg.geometry != "slab":
-                continue
-            ruled = cfg.model_copy(update={"stop_at_runaway": True, "stop_when_held": True})
-            n = replay_decision(ruled, samples[:, S.O_XUMEAN])
-            if n >= samples.shape[0]:  # not decided on the record so far
-                continue
-            time = (np.arange(n) + 1) * (cfg.sample_steps * cfg.dt)  # the run's own sample times (engine.simulate)
-            status, reason, fit = dead_weight_status(ruled, time, samples[:n, S.O_XUMEAN])
-            ok = status == VelocityStatus.OK  # the tester's velocity and SE where it slid steadily (results.schema.dead_weight_attrs)
-            ds = xr.Dataset({"X_mean": ("time", samples[:n, S.O_XUMEAN]), "x_mean": ("time", samples[:n, S.O_XMEAN])},
-                            coords={"time": time},
-                            attrs={"velocity_status": status, "velocity_reason": reason, "source": "checkpoint",
-                                   "velocity": fit.velocity if ok else np.nan, "velocity_sem": fit.sem if ok else np.nan})
-            yield m.id, cfg, ds
+        n, (status, reason, fit) = decision.n, decision.verdict
+        ok = status == VelocityStatus.OK  # the tester's velocity and SE where it slid steadily (results.schema.dead_weight_attrs)
+        ds = xr.Dataset({"X_mean": ("time", row.X_mean[:n]), "x_mean": ("time", row.x_mean[:n])},
+                        coords={"time": decision.time[:n]},
+                        attrs={"velocity_status": status, "velocity_reason": reason, "source": "checkpoint",
+                               "velocity": fit.velocity if ok else np.nan, "velocity_sem": fit.sem if ok else np.nan})
+        yield m.id, m.config, ds
 
 
 def velocity_traces(stores: list[str | os.PathLike], window: float,

@@ -291,18 +291,29 @@ class CheckpointRow:
     message: str
     active: bool  # False once the row's run has ended (its batch goes on for the others)
     velocity: float  # d<X>/dt over the record's last RECENT_WINDOW s (m/s; the rigid top's under a dead weight), nan if < 2 samples
-    X_mean: np.ndarray  # the record <X>(t) so far, every output sample from the first (empty where it cannot be read)
+    samples: np.ndarray  # the record so far: one row per output sample from the first, columns scheme.O_* (mean f_d, <x>, <X>); no rows where it cannot be read
+
+    @property
+    def X_mean(self) -> np.ndarray:
+        """The upper layer's record <X>(t) so far (the tester's top under a dead weight)."""
+        return self.samples[:, S.O_XUMEAN]
+
+    @property
+    def x_mean(self) -> np.ndarray:
+        """The interface layer's record <x>(t) so far."""
+        return self.samples[:, S.O_XMEAN]
 
 
 RECENT_WINDOW = 0.01  # s: the stretch of the record over which checkpoint_rows reads the upper layer's velocity
 
 
 def _record(ds: xr.Dataset, r: int) -> np.ndarray:
-    """Row ``r``'s record <X>(t) so far (empty where the checkpoint holds none)."""
+    """Row ``r``'s record so far, samples by columns O_* (no rows where the checkpoint holds none)."""
     try:
-        return np.asarray(ds[f"rec_samples_{r}"][:, S.O_XUMEAN].values, dtype=float)
-    except (KeyError, ValueError, TypeError, IndexError):
-        return np.zeros(0)
+        rec = np.asarray(ds[f"rec_samples_{r}"].values, dtype=float)
+    except (KeyError, ValueError, TypeError):
+        rec = np.zeros((0, 0))
+    return rec if rec.ndim == 2 and rec.shape[1] > S.O_XUMEAN else np.zeros((0, S.O_XUMEAN + 1))
 
 
 def _recent_velocity(X: np.ndarray, config: str) -> float:
@@ -319,7 +330,9 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
     """The attributes of a checkpoint (wall_time_s, t_simulated, written, ...) and one
     :class:`CheckpointRow` per run in it, reading only those variables and each record's <X>(t) (for
     ``slipchain status``: how far a run has got, how fast its upper layer, or the tester's top, moves now:
-    whether a dead weight is running away or coming back, and what the stop rules say of its record).
+    whether a dead weight is running away or coming back, and what the stop rules say of its record; and for
+    ``slipchain figure traces --checkpoints``: a run the stop rules decide on its record, read before it is
+    stored).
 
     Safe beside a running task: a checkpoint is replaced atomically, never written in place.
     Raises :class:`CheckpointError` for a file that is not a readable checkpoint.
@@ -333,25 +346,10 @@ def checkpoint_rows(path: str | Path) -> tuple[dict, list[CheckpointRow]]:
             records = [_record(ds, r) for r in range(cols[0].size)]
     except Exception as e:  # noqa: BLE001 - h5py's OSError, xarray's ValueError, a KeyError: not a whole checkpoint
         raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
-    rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a), _recent_velocity(X, str(c)), X)
-            for c, n, st, msg, a, X in zip(*cols, records)]
+    rows = [CheckpointRow(str(c), int(n), str(st), str(msg), bool(a), _recent_velocity(rec[:, S.O_XUMEAN], str(c)), rec)
+            for c, n, st, msg, a, rec in zip(*cols, records)]
     return attrs, rows
 
 
-def checkpoint_records(path: str | Path) -> list[tuple[str, np.ndarray]]:
-    """Each run's config TOML and its record so far (output samples from the first, columns of
-    :mod:`~slipchain.engine.scheme`'s ``O_*``: mean f_d, <x>, <X>) from a checkpoint, reading nothing else (for
-    ``slipchain figure traces --checkpoints``: a run the stop rules decide on its record, read before it is
-    stored). Raises :class:`CheckpointError` for a file that is not a readable checkpoint."""
-    from ..results.io import ENGINE
-
-    try:
-        with xr.open_dataset(path, engine=ENGINE) as ds:
-            configs = [str(c) for c in np.atleast_1d(ds["config"].values)]
-            return [(c, np.asarray(ds[f"rec_samples_{r}"].values, dtype=float)) for r, c in enumerate(configs)]
-    except Exception as e:  # noqa: BLE001 - h5py's OSError, xarray's ValueError, a KeyError: not a whole checkpoint
-        raise CheckpointError(f"checkpoint {str(path)!r} is unreadable ({type(e).__name__}: {e})") from None
-
-
 __all__ = ["CHECKPOINT_EVERY", "PACE_POINTS", "PACE_WINDOW", "RECENT_WINDOW", "CheckpointError", "CheckpointRow", "Checkpointer", "Restored",
-           "checkpoint_records", "checkpoint_rows", "recent_pace", "simulated_time"]
+           "checkpoint_rows", "recent_pace", "simulated_time"]

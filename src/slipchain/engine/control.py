@@ -13,7 +13,7 @@ run next and whether a row is done.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
@@ -22,7 +22,7 @@ from ..model.system import DEAD_WEIGHT_RAMP, System, dead_weight_force, dead_wei
 from ..results.checks import DISPLACEMENT_RTOL
 from ..results.observables import count_cycles, steady_estimate, window_velocity
 from ..results.schema import (Status, accelerating_beyond_branch, after_ramp, certain_held, certain_runaway,
-                              dead_weight_velocity, runaway_window, velocity_decided)
+                              dead_weight_status, dead_weight_velocity, runaway_window, velocity_decided)
 from ..results.velocity import VelocityStatus
 from . import scheme as S
 
@@ -365,6 +365,32 @@ def replay_decision(cfg: Config, X_mean: np.ndarray) -> int:
     return row.n
 
 
+class RulesDecision(NamedTuple):
+    """What the released slab's stop rules say of a record (:func:`rules_decision`)."""
+
+    config: Config  # the run's config with both rules on (stop_at_runaway, stop_when_held)
+    time: np.ndarray  # the record's sample times (s): the run's own, (i + 1) * sample_steps * dt
+    n: int  # samples up to where the rules stop the run; the record's length if they do not stop it on it
+    verdict: tuple[str, str, Any] | None  # (velocity status, its reason, the tester's fit) there; None if undecided
+
+
+def rules_decision(cfg: Config, X_mean: np.ndarray) -> RulesDecision | None:
+    """What the stop rules of a released slab (configs ``stop_at_runaway`` and ``stop_when_held``, both on; the
+    run's own ``t_decide``) say of a record <X>(t) so far (every output sample from the first), also for a run
+    made without them: :func:`replay_decision` with the rules on, and where it stops the run the status the run
+    would record there (:func:`~slipchain.results.schema.dead_weight_status`). The rules do not change the
+    dynamics before they stop a run, so the record up to there is the ruled run's. None where they do not apply
+    (no dead weight, no ``t_decide``, not the slab, fewer than two samples). What ``slipchain status`` prints
+    of a checkpointed run and what ``slipchain figure traces --checkpoints`` reads."""
+    if cfg.dead_weight is None or cfg.t_decide is None or cfg.geometry != "slab" or X_mean.size < 2:
+        return None
+    c = cfg.model_copy(update={"stop_at_runaway": True, "stop_when_held": True})
+    n = replay_decision(c, X_mean)
+    time = (np.arange(X_mean.size) + 1) * (c.sample_steps * c.dt)  # as engine.simulate writes a run's times
+    verdict = dead_weight_status(c, time[:n], X_mean[:n]) if n < X_mean.size else None
+    return RulesDecision(c, time, n, verdict)
+
+
 def row_control(system: System, x0_mean: float, interval: float,
                 memory_refusal: Callable[[Any, float, float], str | None] | None = None) -> RowControl:
     """The control of one realisation from its config: fixed length (``t_total``), automatic
@@ -389,5 +415,5 @@ def row_control(system: System, x0_mean: float, interval: float,
     )
 
 
-__all__ = ["CHUNK_TIME", "DEFAULT_MIN_CYCLES", "FEW_CYCLES", "LONG_CHUNK_TIME", "chunk_samples", "chunk_time", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided", "replay_decision",
-           "row_control"]
+__all__ = ["CHUNK_TIME", "DEFAULT_MIN_CYCLES", "FEW_CYCLES", "LONG_CHUNK_TIME", "chunk_samples", "chunk_time", "geometric_check_index", "DECIDE_EVERY", "MIN_STEADY_SAMPLES", "MIN_STEADY_SLIDE", "DeadWeightRamp", "RowControl", "UntilConverged", "UntilDecided", "RulesDecision", "replay_decision",
+           "row_control", "rules_decision"]

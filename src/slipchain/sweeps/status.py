@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.checkpoint import CheckpointError, checkpoint_rows, recent_pace
-from ..engine.control import replay_decision
+from ..engine.checkpoint import CheckpointError, CheckpointRow, checkpoint_rows, recent_pace
+from ..engine.control import rules_decision
 from ..results.schema import Status
 from .definition import Member, SweepError
 from .store import CHECKPOINTS, HOLDER, Store, holder_text, read_holder
@@ -95,10 +95,22 @@ def store_status(path: str | os.PathLike) -> StoreStatus:
         st = Store.open(path)  # refuses a directory without sweep.toml, or one it cannot read
     except SweepError as e:
         raise SweepError(f"--store: {e}") from None
+    flying, stray, unreadable = checkpointed(st)
+    done, failed = st.completed_ids(), st.failed_ids()
+    members = [_member_status(st, m, m.id in done, m.id in failed, flying.get(m.id)) for m in st.sweep.members]
+    return StoreStatus(str(path), st.sweep.name, members, driver_status(path), stray, unreadable)
+
+
+def checkpointed(st: Store) -> tuple[dict[str, tuple[CheckpointRow, dict]], list[str], list[str]]:
+    """The store's checkpoints, read (:func:`~slipchain.engine.checkpoint.checkpoint_rows`): per member id the row
+    that holds its run and its checkpoint's attributes (a member's run matched by its config text); the names of
+    checkpoint files that hold no member of the sweep; and why each unreadable one could not be read. A write in
+    progress (a temporary file) is skipped. What :func:`store_status` reports and what
+    ``slipchain figure traces --checkpoints`` reads (:func:`slipchain.analysis.traces.velocity_traces`)."""
     by_config = {m.config.to_toml(): m for m in st.sweep.members}
-    flying: dict[str, tuple[Any, dict]] = {}
+    flying: dict[str, tuple[CheckpointRow, dict]] = {}
     stray, unreadable = [], []
-    for ck in sorted((path / CHECKPOINTS).glob("*.nc")):
+    for ck in sorted((st.path / CHECKPOINTS).glob("*.nc")):
         if ck.name.startswith("."):  # a write in progress (temporary file)
             continue
         try:
@@ -111,9 +123,7 @@ def store_status(path: str | os.PathLike) -> StoreStatus:
             stray.append(ck.name)
         for r in mine:
             flying[by_config[r.config].id] = (r, attrs)
-    done, failed = st.completed_ids(), st.failed_ids()
-    members = [_member_status(st, m, m.id in done, m.id in failed, flying.get(m.id)) for m in st.sweep.members]
-    return StoreStatus(str(path), st.sweep.name, members, driver_status(path), stray, unreadable)
+    return flying, stray, unreadable
 
 
 def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> MemberStatus:
@@ -140,7 +150,7 @@ def _member_status(st: Store, m: Member, done: bool, failed: bool, flying) -> Me
 def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None,
                pace: tuple[float, float] | None = None) -> str | None:
     """What the stop rules of a released slab (configs ``stop_at_runaway`` and ``stop_when_held``, both on; the
-    run's own ``t_decide``) say of its record <X>(t) so far (:func:`~slipchain.engine.control.replay_decision`):
+    run's own ``t_decide``) say of its record <X>(t) so far (:func:`~slipchain.engine.control.rules_decision`):
     where they stop it and its status there (runaway; no-steady with a "held" reason; ok), or that they have not
     stopped it yet; None for any other run (no dead weight, no ``t_decide``, not the slab). For a run started
     without them: how far it would have had to go. Not decided yet, it adds what the rules read so far (the top's
@@ -149,16 +159,14 @@ def stop_rules(cfg, X_mean: np.ndarray, wall_time_s: float | None = None,
     checkpoint's last writes, :func:`~slipchain.engine.checkpoint.recent_pace`) or else its wall time so far
     (``wall_time_s``, its mean pace), how much more wall time the run needs to get there (an estimate: a run's
     pace changes as its slip does)."""
-    from ..results.schema import (RUNAWAY_RISE, _beyond_branch, _period_velocities, branch_scale, dead_weight_status,
-                                  rules_start)
+    from ..results.schema import RUNAWAY_RISE, _beyond_branch, _period_velocities, branch_scale, rules_start
 
-    if cfg.dead_weight is None or cfg.t_decide is None or cfg.geometry != "slab" or X_mean.size < 2:
+    decision = rules_decision(cfg, X_mean)
+    if decision is None:
         return None
-    c = cfg.model_copy(update={"stop_at_runaway": True, "stop_when_held": True})
-    n = replay_decision(c, X_mean)
-    time = (np.arange(X_mean.size) + 1) * c.output_interval
-    if n < X_mean.size:
-        status, reason, _ = dead_weight_status(c, time[:n], X_mean[:n])
+    c, time, n, verdict = decision
+    if verdict is not None:
+        status, reason, _ = verdict
         said = "held" if reason.startswith("held") else status
         return f"{said} at t = {time[n - 1]:.4g} s"
     t = time[-1]
@@ -216,5 +224,5 @@ def driver_status(path: str | os.PathLike) -> str:
     return f"running ({who})"
 
 
-__all__ = ["FAILED", "IN_FLIGHT", "PENDING", "STORED", "UNREADABLE", "MemberStatus", "StoreStatus", "driver_status",
+__all__ = ["FAILED", "IN_FLIGHT", "PENDING", "STORED", "UNREADABLE", "MemberStatus", "StoreStatus", "checkpointed", "driver_status",
            "stop_rules", "store_status"]
