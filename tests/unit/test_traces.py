@@ -264,7 +264,7 @@ def test_redecide_replays_the_automatic_length_as_a_run_with_that_t_decide(tmp_p
 
 
 def test_traces_read_a_run_the_stop_rules_decide_on_its_checkpoint(tmp_path, checkpointed_releases):
-    """velocity_traces(..., checkpoints=True): a released 4 x 4 slab (tests/unit/test_status.py's) run without the
+    """velocity_traces(..., checkpoints=True): a released 4 x 4 slab (conftest's checkpointed_releases) run without the
     stop rules and checkpointed, not stored, enters the traces and the brackets as the same run made with the rules
     on: its record, bit for bit, up to where they stop it, their status and the outcome read from it; without
     the option the store holds no run and is refused; one member stored and the other only checkpointed, each is
