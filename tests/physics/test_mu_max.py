@@ -395,3 +395,61 @@ def test_a_plan_run_in_batches_equals_one_run_per_task_and_its_sweep_store_reads
     assert len(both) == len(runs) and (both["source_sweep"] == "sweep").all()
     assert (both["velocity_status"] == both["velocity_status_sweep"]).all()
     assert np.array_equal(both["velocity_m_s"].to_numpy(float), both["velocity_m_s_sweep"].to_numpy(float), equal_nan=True)
+
+
+HELD_SHORT = {**AUTO, "t_max": 5e-3}  # runs too short for the transient at mu_a = 0.75: undecided at t_max
+
+
+def test_held_runs_count_below_the_maximum_as_longer_runs_decide_them(tmp_path, two_workers):
+    """Plan key ``held`` (workflows.dead_weight, docs/ladder rung 5): an undecided run whose record ends on
+    the rising branch (analysis.traces.run_outcome: held) moves lo up as a steady one does. Runs of 5 ms
+    leave mu_a = 0.75 creeping towards its steady velocity at t_max: without the rule the bisection stops
+    there; with it, it goes on and finds the bracket that runs of 50 ms find with the tester's status
+    alone (0.75 decided steady there), run for run the same decisions, through the stores on Dask too.
+    A run that is undecided and still fast at its end is not held: it stops the bisection as before."""
+    from slipchain.analysis.traces import ONSET_FACTOR
+    from slipchain.results.schema import branch_scale
+    from slipchain.workflows.dead_weight import HELD, mu_max_many
+
+    short = make_config(**HELD_SHORT, dead_weight=1.0)
+    long_ = mu_max(make_config(**AUTO, dead_weight=1.0), lo=0.5, hi=1.5)
+    plain = mu_max(short, lo=0.5, hi=1.5)
+    held = mu_max(short, lo=0.5, hi=1.5, held=True)
+    assert plain.status == "no-steady" and "undecided at mu_a = 0.75" in plain.message
+    assert long_.status == held.status == "ok" and (held.lo, held.hi) == (long_.lo, long_.hi)
+    assert abs(held.mu_max - single_contact_maximum(short)[0]) <= 3 * TOL  # near the analytic peak
+    ok_or_held = [("ok" if e.velocity_status == HELD else e.velocity_status, e.mu_a) for e in held.evaluations]
+    assert ok_or_held == [(e.velocity_status, e.mu_a) for e in long_.evaluations]
+    h = [e for e in held.evaluations if e.velocity_status == HELD]
+    assert [e.mu_a for e in h] == [0.75] and 0 < h[0].velocity < ONSET_FACTOR * branch_scale(short)
+    assert "held: " in h[0].message and "still drifted" in h[0].message
+    # undecided and still fast at t_max (0.9 in 2.5 ms: the record's mean velocity above the bound): not held
+    fast = evaluate(make_config(**{**AUTO, "t_max": 2.5e-3}, dead_weight=1.0), 0.9, held=True)
+    assert fast.velocity_status == "no-steady" and np.isnan(fast.velocity)
+    # the same through the rounds' stores on a local cluster (the record read from the member file)
+    many = mu_max_many([short], lo=0.5, hi=1.5, store=tmp_path / "out", client=two_workers, progress=False, held=True)
+    assert [(e.mu_a, e.velocity_status, repr(e.velocity)) for e in many[0].evaluations] == \
+        [(e.mu_a, e.velocity_status, repr(e.velocity)) for e in held.evaluations]
+    assert (many[0].lo, many[0].hi, many[0].v_max) == (held.lo, held.hi, held.v_max)
+
+
+def test_plan_key_held_reads_writes_back_and_rejects_a_non_boolean(tmp_path):
+    from slipchain.workflows.dead_weight import load_plan, plan_toml
+
+    text = ("[base]\nN = 11\ndelta = 0.0\nt_decide = 0.002\nt_max = 0.005\n"
+            "[bisection]\ntheta = [1.0]\nseeds = 1\nlo = 0.5\nhi = 1.5\n")
+    off = tmp_path / "off.toml"
+    off.write_text(text)
+    on = tmp_path / "on.toml"
+    on.write_text(text + "held = true\n")
+    plan_off, plan_on = load_plan(off), load_plan(on)
+    assert not plan_off.held and plan_on.held
+    assert "held" not in plan_toml(plan_off)  # a plan without it writes the plan.toml it always wrote
+    back = tmp_path / "back.toml"
+    back.write_text(plan_toml(plan_on))
+    assert load_plan(back) == plan_on
+    for bad in ("1", '"yes"'):
+        f = tmp_path / "bad.toml"
+        f.write_text(text + f"held = {bad}\n")
+        with pytest.raises(ConfigError, match=r"mu-max key 'held' has value .*; expected true or false"):
+            load_plan(f)

@@ -53,8 +53,10 @@ def plot_mu_max(summary: pd.DataFrame, evaluations: pd.DataFrame, branch: tuple[
     colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))))
     ok = evaluations[evaluations["velocity_status"] == OK]
     run = evaluations[evaluations["velocity_status"] == RUNAWAY]
-    v_lo = ok["velocity_m_s"].min() if len(ok) else 1e-6
-    v_hi = ok["velocity_m_s"].max() if len(ok) else 1e-3
+    held = evaluations[evaluations["velocity_status"] == "held"]  # a plan with held = true (workflows.dead_weight)
+    moving = pd.concat([ok, held])
+    v_lo = moving["velocity_m_s"].min() if len(moving) else 1e-6
+    v_hi = moving["velocity_m_s"].max() if len(moving) else 1e-3
     x_edge = v_hi * 3
     bv, bm = branch
     sel = (bv >= v_lo / 2) & (bv <= v_hi * 1.5)
@@ -64,6 +66,9 @@ def plot_mu_max(summary: pd.DataFrame, evaluations: pd.DataFrame, branch: tuple[
         o = ok[ok["theta"] == th]
         ax.plot(o["velocity_m_s"], o["mu_a"], "o", ms=3.5, color=c, alpha=0.8, ls="none",
                 label=f"theta = {th:g}: steady (all seeds)")
+        h = held[held["theta"] == th]
+        if len(h):
+            ax.plot(h["velocity_m_s"], h["mu_a"], "o", ms=4, mfc="none", color=c, ls="none")
         r = run[run["theta"] == th]
         if len(r):
             ax.plot(np.full(len(r), x_edge) * (1 + 0.08 * thetas.index(th)), r["mu_a"], ">", ms=4, color=c, ls="none")
@@ -73,6 +78,8 @@ def plot_mu_max(summary: pd.DataFrame, evaluations: pd.DataFrame, branch: tuple[
             ax.errorbar([s["v_max_m_s"]], [s["mu_max"]], yerr=[s["mu_max_se"]], fmt="_", ms=16, mew=2, color=c,
                         capsize=3)
     ax.plot([], [], ">", color="gray", ls="none", label="runaway (drawn at the right edge)")
+    if len(held):
+        ax.plot([], [], "o", mfc="none", color="gray", ls="none", label="held: still creeping at the run's end (end velocity)")
     ax.plot([], [], "_", color="gray", ms=12, mew=2, ls="none", label="mu_max (seed mean ± SE) at v_max")
     ax.set_xscale("log")
     ax.set_xlabel("v (m/s)")

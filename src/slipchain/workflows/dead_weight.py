@@ -12,6 +12,14 @@ Bisection keeps ``lo`` steady and ``hi`` runaway and halves the bracket until it
 ``2*tol``; mu_max is its middle (so within ``tol`` of the true edge, for this realisation and run
 length), v_max the steady velocity measured at ``lo``. A ``no-steady`` evaluation stops the
 bisection with that status: the run was too short to decide (a longer ``t_total`` decides it).
+With ``held`` (plan key, :func:`mu_max_many`'s argument) an undecided run whose record ends on the rising
+branch counts as below the maximum, as the tester's grids read it (rung 6l of docs/ladder): a ``no-steady``
+run that is **held** by :func:`slipchain.analysis.traces.run_outcome` (its mean velocity over the record's
+last HELD_WINDOW s below ONSET_FACTOR v0 10**delta, so the weight did not pull it away within the run) is
+evaluated ``held`` and moves ``lo`` up as a steady one does; ``v_max`` is then that end velocity. This is for
+sliders that creep under a constant weight for longer than any affordable run (the viscoelastic slab, whose
+arms relax over up to a second at 20 °C: docs/ladder, rung 5); it bounds mu_max for runs of that length,
+as a tester's own runs do. Off (the default) the bisection is the tester's alone, as before.
 Just below the maximum the steady state is hard to reach and to recognise (its restoring slope,
 the slope of f(v), vanishes at the peak): with identical contacts (N = 11, delta = 0) mu_a = 1.0,
 1.5e-4 below the analytic peak 1.00015, is classified runaway in runs of 5, 20 and 50 ms alike,
@@ -57,6 +65,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 TOL = 0.005  # the issue's resolution of mu_max
 BRACKET = "bracket"  # status of a realisation whose runs at lo or hi did not bracket mu_max
+HELD = "held"  # an evaluation's status with ``held`` on: undecided, but ended on the rising branch (run_outcome)
 
 
 class BracketError(ValueError):
@@ -86,28 +95,32 @@ class MuMax:
     message: str = ""  # why it is not 'ok'
 
 
-def evaluate(config: Config, mu_a: float, backend: str | BackendName = BackendName.CPU) -> Evaluation:
-    """One dead-weight run at applied ``mu_a`` and the tester's classification of its velocity."""
-    ds = run(config.with_updates(dead_weight=float(mu_a)), backend=backend, progress=False)
-    return _evaluation(mu_a, ds.attrs)
+def evaluate(config: Config, mu_a: float, backend: str | BackendName = BackendName.CPU, held: bool = False) -> Evaluation:
+    """One dead-weight run at applied ``mu_a`` and the tester's classification of its velocity
+    (``held``: an undecided run that ends on the rising branch is ``held``, module docstring)."""
+    cfg = config.with_updates(dead_weight=float(mu_a))
+    ds = run(cfg, backend=backend, progress=False)
+    e = _evaluation(mu_a, ds.attrs)
+    return _held(cfg, e, lambda: ds) if held else e
 
 
 def mu_max(config: Config | Mapping[str, Any], *, lo: float = 0.3, hi: float = 1.5, tol: float = TOL,
-           backend: str | BackendName = BackendName.CPU) -> MuMax:
+           backend: str | BackendName = BackendName.CPU, held: bool = False) -> MuMax:
     """The largest applied mu_a with steady sliding, by bisection to within ``tol`` (module docstring).
 
     ``config``: the realisation (its ``dead_weight`` is set by the bisection; give ``t_total``
-    long enough for the velocity to settle). ``lo`` must give steady sliding and ``hi`` a runaway;
-    BracketError (naming them and what the runs gave) if they do not; ConfigError if ``lo >= hi``.
+    long enough for the velocity to settle). ``lo`` must give steady sliding (or, with ``held``, a
+    held run) and ``hi`` a runaway; BracketError (naming them and what the runs gave) if they do not;
+    ConfigError if ``lo >= hi``.
     """
     cfg = config if isinstance(config, Config) else make_config(dict(config))
-    return _bisect([cfg], lo, hi, tol, lambda jobs: [evaluate(c, m, backend) for c, m in jobs])[0]
+    return _bisect([cfg], lo, hi, tol, lambda jobs: [evaluate(c, m, backend, held) for c, m in jobs])[0]
 
 
 def mu_max_many(configs: list[Config], *, lo: float = 0.3, hi: float = 1.5, tol: float = TOL,
                 store: str | os.PathLike | None = None, client: Any = None, scheduler: str | None = None,
                 n_workers: int | None = None, backend: str | BackendName = BackendName.CPU, strict: bool = True,
-                progress: bool | None = None) -> list[MuMax]:
+                progress: bool | None = None, held: bool = False) -> list[MuMax]:
     """:func:`mu_max` for many realisations at once, each round's runs a sweep of their own in a
     store (:class:`Rounds`); the same results as one :func:`mu_max` per config.
 
@@ -115,10 +128,11 @@ def mu_max_many(configs: list[Config], *, lo: float = 0.3, hi: float = 1.5, tol:
     else a temporary one; ``client``: an existing ``distributed.Client``, else ``scheduler`` (an
     address) or a local cluster of ``n_workers`` processes, started only if something is to run.
     ``strict=False``: a refuted bracket marks that realisation ``bracket`` instead of raising
-    BracketError. KeyboardInterrupt if interrupted (Ctrl-C, SIGTERM): every finished run is kept."""
+    BracketError. ``held``: held runs count below the maximum (module docstring). KeyboardInterrupt
+    if interrupted (Ctrl-C, SIGTERM): every finished run is kept."""
     configs = [c if isinstance(c, Config) else make_config(dict(c)) for c in configs]
     with Rounds(store, client=client, scheduler=scheduler, n_workers=n_workers, backend=backend,
-                progress=progress) as rounds:
+                progress=progress, held=held) as rounds:
         return _bisect(configs, lo, hi, tol, rounds.evaluate, strict)
 
 
@@ -158,8 +172,9 @@ class Rounds:
     def __init__(self, out: str | os.PathLike | None, *, client: Any = None, scheduler: str | None = None,
                  n_workers: int | None = None, backend: str | BackendName = BackendName.CPU,
                  progress: bool | None = None, announce: Callable[[str], None] | None = None,
-                 batch_size: int | None = None):
+                 batch_size: int | None = None, held: bool = False):
         self.out, self.client, self.scheduler, self.n_workers = out, client, scheduler, n_workers
+        self.held = held  # an undecided member that ends on the rising branch is evaluated 'held' (_held)
         self.batch_size = batch_size  # runs per task, advanced together (run_sweep's batch_size)
         self.announce = announce  # called with the dashboard's address when a cluster is started
         self.backend, self.progress = str(backend), progress
@@ -210,7 +225,8 @@ class Rounds:
             if report.interrupted:
                 raise KeyboardInterrupt
             for m in sweep.members:
-                found[m.id] = _evaluation(m.config.dead_weight, st.member_attrs(m))
+                e = _evaluation(m.config.dead_weight, st.member_attrs(m))
+                found[m.id] = _held(m.config, e, lambda m=m: st.read_member(m)) if self.held else e
         return [found[i] for i in ids]
 
     def _legacy(self, mid: str, mu_a: float) -> Evaluation | None:
@@ -268,6 +284,26 @@ def _evaluation(mu_a: float, attrs: Mapping[str, Any] | None) -> Evaluation:
     return Evaluation(float(mu_a), vstatus, float(a.get("velocity", np.nan)), message)
 
 
+def _held(cfg: Config, e: Evaluation, dataset: Callable[[], Any]) -> Evaluation:
+    """``e`` evaluated ``held`` where it is an undecided (``no-steady``) run that
+    :func:`slipchain.analysis.traces.run_outcome` calls held (module docstring; ``dataset`` gives the run's
+    record, read only then), with its end velocity; otherwise ``e`` as it is."""
+    if e.velocity_status != VelocityStatus.NO_STEADY or e.message == NOT_RUN:
+        return e
+    from ..analysis.traces import HELD_WINDOW, ONSET_FACTOR, run_outcome
+
+    ds = dataset()
+    outcome, v_end = run_outcome(cfg, str(e.velocity_status), ds["time"].values, ds["X_mean"].values)
+    if outcome != HELD:
+        return e
+    why = (f"held: {v_end:.3g} m/s over the last {HELD_WINDOW:g} s, below {ONSET_FACTOR:g} v0 10**delta "
+           "(not pulled away within the run)")
+    return Evaluation(e.mu_a, HELD, v_end, "; ".join(m for m in (e.message, why) if m))
+
+
+LOWER = (str(VelocityStatus.OK), HELD)  # the statuses that move a bracket's lo up
+
+
 def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
             evaluate_all: Callable[[list[tuple[Config, float]]], list[Evaluation]], strict: bool = True) -> list[MuMax]:
     """Bisection of every config in lock-step: ``evaluate_all`` gets one round's (config, mu_a) pairs.
@@ -281,7 +317,7 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
     refuted: dict[int, str] = {}  # realisations whose runs at lo or hi did not bracket mu_max, and why
     for i in range(n):
         e_lo, e_hi = evals[i]
-        if e_lo.velocity_status != VelocityStatus.OK:
+        if e_lo.velocity_status not in LOWER:
             refuted[i] = (f"mu_max: lo = {lo} must give steady sliding; the run gave {e_lo.velocity_status} "
                           f"({e_lo.message or 'no message'}) for seed {configs[i].seed}, theta {configs[i].theta}; "
                           "expected a smaller lo or a longer run (t_total, or t_max with t_decide)")
@@ -299,7 +335,7 @@ def _bisect(configs: list[Config], lo: float, hi: float, tol: float,
         mids = [0.5 * (brackets[i][0] + brackets[i][1]) for i in open_]
         for i, mid, e in zip(open_, mids, evaluate_all([(configs[i], m) for i, m in zip(open_, mids)])):
             evals[i].append(e)
-            if e.velocity_status == VelocityStatus.OK:
+            if e.velocity_status in LOWER:
                 brackets[i][0], brackets[i][2] = mid, e.velocity
             elif e.velocity_status == VelocityStatus.RUNAWAY:
                 brackets[i][1] = mid
@@ -384,7 +420,8 @@ def _evaluation_rows(pairs: list[tuple[Config, Evaluation]], source: str, extra:
 PLAN_KEYS = {"theta": "a list of numbers in (0, 1]", "seeds": "an integer >= 1 (seeds 0..seeds-1)",
              "lo": "a number > 0 that gives steady sliding", "hi": "a number > lo that runs away",
              "tol": "a number > 0 (resolution of mu_max)",
-             "curve": "a list of numbers > 0: extra applied mu_a below lo, run at seed 0, for the mu(v) figure"}
+             "curve": "a list of numbers > 0: extra applied mu_a below lo, run at seed 0, for the mu(v) figure",
+             "held": "true or false: an undecided run that ends on the rising branch counts below mu_max"}
 
 
 @dataclass(frozen=True)
@@ -400,6 +437,7 @@ class Plan:
     tol: float = TOL
     curve: tuple[float, ...] = ()
     name: str = "mu-max"
+    held: bool = False  # held runs count below the maximum (module docstring)
 
     def check(self) -> "Plan":
         """Every setting valid and every config of the plan valid, before anything runs (ConfigError)."""
@@ -458,16 +496,20 @@ def load_plan(path: str | os.PathLike | None, overrides: list[str] = (), **setti
     bad = next((k for k in bisection if not _convertible(k, bisection[k])), None)
     if bad is not None:
         raise ConfigError(f"mu-max key '{bad}' has value {bisection[bad]!r}; expected {PLAN_KEYS[bad]}")
-    kw = {k: (tuple(float(x) for x in v) if k in ("theta", "curve") else int(v) if k == "seeds" else float(v))
+    kw = {k: (tuple(float(x) for x in v) if k in ("theta", "curve") else int(v) if k == "seeds"
+              else bool(v) if k == "held" else float(v))
           for k, v in bisection.items()}
     return Plan(make_config(base), name=str(data.get("name", "mu-max")), **kw).check()
 
 
 def _convertible(key: str, value: Any) -> bool:
-    """Whether a [bisection] value has the type PLAN_KEYS says (TOML or CLI; no booleans, no strings)."""
+    """Whether a [bisection] value has the type PLAN_KEYS says (TOML or CLI; no strings; booleans for
+    ``held`` alone)."""
     def number(x: Any) -> bool:
         return isinstance(x, (int, float)) and not isinstance(x, bool)
 
+    if key == "held":
+        return isinstance(value, bool)
     if key in ("theta", "curve"):
         return isinstance(value, (list, tuple)) and all(number(x) for x in value)
     if key == "seeds":
@@ -501,7 +543,7 @@ def run_plan(plan: Plan, out: str | os.PathLike, *, client: Any = None, schedule
     out = Path(out)
     configs = plan.configs()
     with Rounds(out, client=client, scheduler=scheduler, n_workers=n_workers, backend=backend,
-                progress=progress, announce=announce, batch_size=batch_size) as rounds:
+                progress=progress, announce=announce, batch_size=batch_size, held=plan.held) as rounds:
         results = _bisect(configs, plan.lo, plan.hi, plan.tol, rounds.evaluate, strict=False)
         curve_jobs = [(plan.base.with_updates(theta=float(t), seed=0), float(m)) for t in plan.theta for m in plan.curve]
         curve = rounds.evaluate(curve_jobs) if curve_jobs else []
@@ -524,7 +566,8 @@ def plan_toml(plan: Plan) -> str:
     lists = lambda xs: "[" + ", ".join(repr(float(x)) for x in xs) + "]"  # noqa: E731
     base = plan.base.to_toml()
     return (f'name = "{plan.name}"\n\n[base]\n{base}\n[bisection]\ntheta = {lists(plan.theta)}\nseeds = {plan.seeds}\n'
-            f"lo = {plan.lo!r}\nhi = {plan.hi!r}\ntol = {plan.tol!r}\ncurve = {lists(plan.curve)}\n")
+            f"lo = {plan.lo!r}\nhi = {plan.hi!r}\ntol = {plan.tol!r}\ncurve = {lists(plan.curve)}\n"
+            + ("held = true\n" if plan.held else ""))  # absent when off: the plan.toml of every result before it
 
 
 def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float, float]:
@@ -537,7 +580,7 @@ def single_contact_maximum(config: Config, points: int = 400_001) -> tuple[float
     return float(f[i]), float(u[i])
 
 
-__all__ = ["BRACKET", "NOT_RUN", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "Rounds",
+__all__ = ["BRACKET", "HELD", "NOT_RUN", "PLAN_KEYS", "TOL", "BracketError", "Evaluation", "MuMax", "Plan", "PlanResult", "Rounds",
            "evaluate", "evaluate_many", "round_sweep",
            "evaluations_table", "load_plan", "outcome", "mu_max", "mu_max_many", "mu_max_summary", "mu_max_table", "plan_toml",
            "run_plan", "single_contact_maximum"]
@@ -565,7 +608,9 @@ def mu_max_figure(result: str | os.PathLike, out: str | os.PathLike,
     summary, evals, table = (pd.read_csv(files[n]) for n in ("mu_max_summary.csv", "evaluations.csv", "mu_max.csv"))
     if summary.empty:
         raise ConfigError(f"{str(files['mu_max_summary.csv'])!r} has no theta with a decided mu_max; nothing to draw")
-    base = make_config(dict(read_toml(files["plan.toml"]).get("base", {})))
+    plan_data = read_toml(files["plan.toml"])
+    base = make_config(dict(plan_data.get("base", {})))
+    held = bool(plan_data.get("bisection", {}).get("held", False))
     v = np.geomspace(base.v0 * 1e-4, base.v0 * 10, 600)
     branch = (v, g(v, base.v0, base.delta, base.c))
     try:
@@ -573,15 +618,17 @@ def mu_max_figure(result: str | os.PathLike, out: str | os.PathLike,
     except (OSError, ValueError) as e:
         raise ConfigError(f"--spring {str(spring_index)!r}: {e}") from None
     paths = plot_mu_max(summary, evals, branch, spring, out)
-    text = mu_max_report(summary, table, spring, base, folder, spring_index)
+    text = mu_max_report(summary, table, spring, base, folder, spring_index, held)
     paths.append(write_text_atomic(Path(out) / "report.md", text))
     return paths
 
 
 def mu_max_report(summary: "pd.DataFrame", table: "pd.DataFrame", spring: "pd.DataFrame | None", base: Config,
-                  folder: Path, spring_index) -> str:
-    """report.md: the numbers behind the figure and what they say."""
+                  folder: Path, spring_index, held: bool = False) -> str:
+    """report.md: the numbers behind the figure and what they say (``held``: the plan counted held runs
+    below the maximum)."""
     from ..analysis.fit import g_max
+    from ..analysis.traces import HELD_WINDOW
 
     slider = ("elastic springs" if base.material == "elastic"
               else f"{base.material} rubber at {base.temperature:g} °C")
@@ -589,7 +636,10 @@ def mu_max_report(summary: "pd.DataFrame", table: "pd.DataFrame", spring: "pd.Da
     lines = [f"# mu_max(theta) under a dead weight, {slider}: the model measured as the tester measures", "",
              f"From `{folder}` (`slipchain mu-max`; N = {base.N}, eta_c = {base.eta_c:g} 1/s, epsilon = {base.epsilon:g}, "
              f"t_decide = {base.t_decide}, t_max = {base.t_max:g} s). Every contact sliding steadily would give at most "
-             f"g_max = {g_max(base.delta, base.c):.4f} (eq. 1 averaged over v*).", "",
+             f"g_max = {g_max(base.delta, base.c):.4f} (eq. 1 averaged over v*)."
+             + (" Held runs (undecided at t_max but ending on the rising branch, `slipchain.analysis.traces.run_outcome`) "
+                "count below the maximum (plan key `held`); where the bracket's lower end is held, v_max is its "
+                f"velocity over the run's last {HELD_WINDOW:g} s, still creeping." if held else ""), "",
              "| theta | seeds decided | mu_max (± SE) | ratio to smallest theta | v_max (m/s) |", "|---|---|---|---|---|"]
     for r in summary.itertuples():
         n_all = int((table["theta"] == r.theta).sum())
