@@ -632,6 +632,8 @@ def mu_max_report(summary: "pd.DataFrame", table: "pd.DataFrame", spring: "pd.Da
 
     slider = ("elastic springs" if base.material == "elastic"
               else f"{base.material} rubber at {base.temperature:g} °C")
+    if base.geometry != "chain":  # the chain's reports keep their title; a 2-D interface says which
+        slider += f", {base.geometry} geometry, {base.N} x {base.Ly} interface"
     # the title names the slider: each report of the site has its own (issue 30)
     lines = [f"# mu_max(theta) under a dead weight, {slider}: the model measured as the tester measures", "",
              f"From `{folder}` (`slipchain mu-max`; N = {base.N}, eta_c = {base.eta_c:g} 1/s, epsilon = {base.epsilon:g}, "
