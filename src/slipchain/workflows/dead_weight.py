@@ -634,6 +634,10 @@ def mu_max_report(summary: "pd.DataFrame", table: "pd.DataFrame", spring: "pd.Da
               else f"{base.material} rubber at {base.temperature:g} °C")
     if base.geometry != "chain":  # the chain's reports keep their title; a 2-D interface says which
         slider += f", {base.geometry} geometry, {base.N} x {base.Ly} interface"
+    if base.epsilon != Config.model_fields["epsilon"].default:  # and a contact stiffness other than the paper's
+        slider += f", epsilon = {base.epsilon:g}"
+    if base.t_ramp is not None and base.t_ramp != 0.2:  # and a ramp other than the 200 ms of docs/mu-max
+        slider += f", the weight raised over {base.t_ramp:g} s"
     # the title names the slider: each report of the site has its own (issue 30)
     lines = [f"# mu_max(theta) under a dead weight, {slider}: the model measured as the tester measures", "",
              f"From `{folder}` (`slipchain mu-max`; N = {base.N}, eta_c = {base.eta_c:g} 1/s, epsilon = {base.epsilon:g}, "
