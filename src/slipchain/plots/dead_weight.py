@@ -85,7 +85,7 @@ def plot_mu_max(summary: pd.DataFrame, evaluations: pd.DataFrame, branch: tuple[
     ax.set_xlabel("v (m/s)")
     ax.set_ylabel(r"applied $\mu_a$ (dead weight)")
     ax.set_title("(a) model under a dead weight: mu(v) on the rising branch", fontsize=10)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="upper left")  # the branch rises to the right: slow and heavy is empty
     bx.errorbar(summary["theta"], summary["ratio_to_theta_min"], yerr=summary["ratio_se"], fmt="o-", color="tab:red",
                 capsize=3, label="dead weight: mu_max (bisection, ± SE)")
     if spring is not None and len(spring):
@@ -136,7 +136,7 @@ def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Pat
         e = f.params
         ax.set_title(f"{' / '.join(str(x) for x in f.group)}: F = {e['F'].value:.3g}, v0 = {e['v0'].value:.2g} m/s, "
                      f"delta = {e['delta'].value:.2g}, p_ref = {e['p_ref'].value / 1e3:.3g} kPa", fontsize=9)
-        ax.legend(fontsize=7, loc="lower right")
+        ax.legend(fontsize=7, loc="upper left")  # the branch rises to the right: slow and heavy is empty
         pr = f.pressures
         has = np.isfinite(pr["m_obs"])
         bx.errorbar(pr["pressure_Pa"][has] / 1e3, pr["m_obs"][has], yerr=pr["m_obs_se"][has], fmt="o", color="k",
