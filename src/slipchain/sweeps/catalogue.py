@@ -74,7 +74,7 @@ CATALOGUE: dict[str, Study] = {
                          "the ladder's epsilon = 1 rung: mu_max on the chain under a dead weight (200-ms ramp)"),
     "ladder-eps1-held": Study("plan", 96, "9 min (3-29 s a run)", "docs/ladder/index.md",
                               "the epsilon = 1 rung to the end: runs of 3 s, runaways stopped, held runs below"),
-    "ladder-eps1-slow-held": Study("plan", 0, "RUNNING", "docs/ladder/index.md",
+    "ladder-eps1-slow-held": Study("plan", 56, "30 min (22-93 s a run)", "docs/ladder/index.md",
                                    "rung 3s to the end: the 2-s ramp, runaways stopped, held runs below, four loads"),
     "ladder-eps1-slow": Study("plan", 27, "47 min", "docs/ladder/index.md",
                               "the epsilon = 1 rung loaded ten times more slowly (2-s ramp, runs of 5 s)"),
