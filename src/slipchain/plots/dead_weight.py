@@ -136,7 +136,7 @@ def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Pat
         e = f.params
         ax.set_title(f"{' / '.join(str(x) for x in f.group)}: F = {e['F'].value:.3g}, v0 = {e['v0'].value:.2g} m/s, "
                      f"delta = {e['delta'].value:.2g}, p_ref = {e['p_ref'].value / 1e3:.3g} kPa", fontsize=9)
-        ax.legend(fontsize=7, loc="upper left")  # the branch rises to the right: slow and heavy is empty
+        ax.legend(fontsize=7, loc="lower right")
         pr = f.pressures
         has = np.isfinite(pr["m_obs"])
         bx.errorbar(pr["pressure_Pa"][has] / 1e3, pr["m_obs"][has], yerr=pr["m_obs_se"][has], fmt="o", color="k",
