@@ -88,7 +88,7 @@ CATALOGUE: dict[str, Study] = {
                            "the ladder's rubber rung by bisection (stopped at its bracket: needs longer runs)"),
     "ladder-rubber-long": Study("plan", 84, "12 min (8-22 s a run)", "docs/ladder/index.md",
                                 "the ladder's rubber rung by bisection: runs of 5 s, runaways stopped, held runs below"),
-    "ladder-rubber-slow": Study("plan", 84, "seed 0 (--seeds 1): 22 min; all three about 70 min (80-200 s a run)",
+    "ladder-rubber-slow": Study("plan", 84, "61 min (80-200 s a run)",
                                 "docs/ladder/index.md", "rung 5 with the weight raised over 2 s: does the rubber's dip shrink?"),
     "ladder-rubber-grid": Study("study", 16, "283 s on 16 CPUs", "docs/ladder/index.md",
                                 "the ladder's rubber rung as a grid of weights on a 16 x 16 slab"),
