@@ -76,7 +76,7 @@ CATALOGUE: dict[str, Study] = {
                               "the epsilon = 1 rung to the end: runs of 3 s, runaways stopped, held runs below"),
     "ladder-eps1-slow-held": Study("plan", 56, "30 min (22-93 s a run)", "docs/ladder/index.md",
                                    "rung 3s to the end: the 2-s ramp, runaways stopped, held runs below, four loads"),
-    "ladder-eps1-slow6-held": Study("plan", 56, "not yet run (estimated 1-1.5 h on 2 cores)", "docs/ladder/index.md",
+    "ladder-eps1-slow6-held": Study("plan", 56, "98 min (90-240 s a run)", "docs/ladder/index.md",
                                     "rung 3s-6 by bisection: the 6-s ramp, runs of 10 s, held runs below, four loads"),
     "ladder-eps1-slow": Study("plan", 27, "47 min", "docs/ladder/index.md",
                               "the epsilon = 1 rung loaded ten times more slowly (2-s ramp, runs of 5 s)"),
