@@ -77,7 +77,7 @@ CATALOGUE: dict[str, Study] = {
     "ladder-eps1-slow-held": Study("plan", 56, "30 min (22-93 s a run)", "docs/ladder/index.md",
                                    "rung 3s to the end: the 2-s ramp, runaways stopped, held runs below, four loads"),
     "ladder-eps1-slow6-held": Study("plan", 56, "98 min (90-240 s a run)", "docs/ladder/index.md",
-                                    "rung 3s-6 by bisection: the 6-s ramp, runs of 10 s, held runs below, four loads"),
+                                    "rung 3s-6b: the 6-s ramp by bisection, runs of 10 s, held runs below, four loads"),
     "ladder-eps1-slow": Study("plan", 27, "47 min", "docs/ladder/index.md",
                               "the epsilon = 1 rung loaded ten times more slowly (2-s ramp, runs of 5 s)"),
     "ladder-eps1-slow-grid": Study("study", 122, "2- and 6-s ramps 35 min; 20-s ramps ~5 h (510-880 s per run decided at 20.5 s)", "docs/ladder/index.md",
