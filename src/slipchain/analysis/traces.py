@@ -43,6 +43,7 @@ import pandas as pd
 import xarray as xr
 
 from ..results.schema import branch_scale  # v0 10**delta, the scale of every threshold here
+from ..results.velocity import VelocityStatus
 
 ONSET_FACTOR = 3.0  # the runaway's onset: the velocity passes ONSET_FACTOR v0 10**delta for the last time
 ONSET_CHECK = 10.0  # ...and, for comparison, this multiple
@@ -50,7 +51,10 @@ ELASTIC_WEIGHTS = (0.1, 0.2)  # mu_a: where ramp_branch reads the interface's el
 HELD_WINDOW = 0.2  # s: the last stretch of a record whose mean velocity says held (about one ring of the tester's top)
 BRANCH_VELOCITIES = (3e-5, 1e-4, 2e-4)  # m/s: where branch_summary reads mu(v), below every load's maximum
 BRANCH_COLUMNS = ("t", "mu", "v", "v_slip")  # ramp_branch's columns (velocity_traces adds the run's identity)
-OUTCOMES = ("steady", "held", "runaway", "undecided")  # run_outcome's values; the first two bound mu_max from below
+STEADY, HELD, UNDECIDED = "steady", "held", "undecided"  # run_outcome's values (one spelling each) ...
+RUNAWAY = str(VelocityStatus.RUNAWAY)  # ... and the tester's status for a runaway, which it keeps
+OUTCOMES = (STEADY, HELD, RUNAWAY, UNDECIDED)  # the first two bound mu_max from below (BELOW)
+BELOW = (STEADY, HELD)  # the outcomes that bound mu_max from below: the largest such weight is a bracket's lower end
 
 
 def window_velocity(time: np.ndarray, x: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
@@ -162,19 +166,19 @@ def run_outcome(cfg, status: str, time: np.ndarray, x: np.ndarray) -> tuple[str,
     end velocity (m/s)."""
     time, x = np.asarray(time, float), np.asarray(x, float)
     if time.size < 2:
-        return ("steady" if status == "ok" else "runaway" if status == "runaway" else "undecided"), float("nan")
+        return (STEADY if status == VelocityStatus.OK else RUNAWAY if status == RUNAWAY else UNDECIDED), float("nan")
     n = max(int(round(HELD_WINDOW / _interval(time))), 1)  # the window in whole samples
     j = max(time.size - 1 - n, 0)
     v_end = float((x[-1] - x[j]) / (time[-1] - time[j]))
-    if status == "ok":
-        return "steady", v_end
-    if status == "runaway":
-        return "runaway", v_end
-    return ("held" if v_end < ONSET_FACTOR * branch_scale(cfg) else "undecided"), v_end
+    if status == VelocityStatus.OK:
+        return STEADY, v_end
+    if status == RUNAWAY:
+        return RUNAWAY, v_end
+    return (HELD if v_end < ONSET_FACTOR * branch_scale(cfg) else UNDECIDED), v_end
 
 
 def seed_brackets(runs: pd.DataFrame, by: list[str] | tuple[str, ...] = (), status: str = "outcome",
-                  lower: tuple[str, ...] = ("steady", "held"), upper: tuple[str, ...] = ("runaway",)) -> pd.DataFrame:
+                  lower: tuple[str, ...] = BELOW, upper: tuple[str, ...] = (RUNAWAY,)) -> pd.DataFrame:
     """The bracket on mu_max that each seed's runs give, per group ``by`` (e.g. interface, temperature,
     ramp, load): ``lo`` the largest weight ``mu_a`` whose ``status`` is in ``lower`` (0 if none), ``hi``
     the smallest in ``upper`` (inf if none), ``runs`` how many runs, and ``consistent`` (lo < hi: a held
@@ -301,7 +305,7 @@ def velocity_traces(stores: list[str | os.PathLike], window: float,
     return pd.concat(traces, ignore_index=True), pd.DataFrame(onsets), branch
 
 
-SIDES = {"steady": "below", "held": "below", "runaway": "above", "undecided": "undecided"}  # a run's side of mu_max
+SIDES = {STEADY: "below", HELD: "below", RUNAWAY: "above", UNDECIDED: "undecided"}  # a run's side of mu_max
 
 
 def redecide(stores: list[str | os.PathLike], t_decides: list[float] | tuple[float, ...],
@@ -536,7 +540,8 @@ def protocol_brackets(onsets: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=[*BRACKET_KEYS, "lo", "hi", "seeds", "runs", "inconsistent", "per_seed"])
 
 
-__all__ = ["BRACKET_KEYS", "BRANCH_COLUMNS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD_WINDOW", "KEYS", "ONSET_CHECK", "ONSET_FACTOR",
-           "OUTCOMES", "branch_check", "branch_scale", "branch_summary", "first_crossing", "is_release", "last_crossing", "loading_rate", "onset_summary",
+__all__ = ["BELOW", "BRACKET_KEYS", "BRANCH_COLUMNS", "BRANCH_VELOCITIES", "ELASTIC_WEIGHTS", "HELD", "HELD_WINDOW", "KEYS",
+           "ONSET_CHECK", "ONSET_FACTOR", "OUTCOMES", "RUNAWAY", "STEADY", "UNDECIDED", "branch_check", "branch_scale",
+           "branch_summary", "first_crossing", "is_release", "last_crossing", "loading_rate", "onset_summary",
            "protocol_brackets", "ramp_branch", "rows_equal", "rows_matching", "run_outcome", "runaway_onset", "seed_brackets", "velocity_traces",
            "window_velocity"]

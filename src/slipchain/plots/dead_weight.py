@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ..analysis.statistics import ratios_to_first
-from ..analysis.traces import rows_matching
+from ..analysis.traces import HELD, STEADY, UNDECIDED, rows_matching
 from ..tester.analysis import OK, RUNAWAY, pressure_group
 from .common import pyplot, save_figure
 
@@ -53,7 +53,7 @@ def plot_mu_max(summary: pd.DataFrame, evaluations: pd.DataFrame, branch: tuple[
     colors = dict(zip(thetas, plt.cm.viridis(np.linspace(0, 0.85, len(thetas)))))
     ok = evaluations[evaluations["velocity_status"] == OK]
     run = evaluations[evaluations["velocity_status"] == RUNAWAY]
-    held = evaluations[evaluations["velocity_status"] == "held"]  # a plan with held = true (workflows.dead_weight)
+    held = evaluations[evaluations["velocity_status"] == HELD]  # a plan with held = true (workflows.dead_weight)
     moving = pd.concat([ok, held])
     v_lo = moving["velocity_m_s"].min() if len(moving) else 1e-6
     v_hi = moving["velocity_m_s"].max() if len(moving) else 1e-3
@@ -154,7 +154,7 @@ def plot_fit(runs: pd.DataFrame, fits: list, out: str | os.PathLike) -> list[Pat
     return paths
 
 
-STATUS_STYLE = {"steady": "-", "runaway": "--", "held": ":", "undecided": "-."}  # a run's outcome, by line style
+STATUS_STYLE = {STEADY: "-", RUNAWAY: "--", HELD: ":", UNDECIDED: "-."}  # a run's outcome, by line style
 
 
 def plot_velocity_traces(traces: pd.DataFrame, onsets: pd.DataFrame, window: float, out: str | os.PathLike) -> list[Path]:
@@ -234,7 +234,7 @@ def plot_branches(branch: pd.DataFrame, onsets: pd.DataFrame, out: str | os.Path
             on = onsets[(onsets["member_id"] == _id) & onsets["during_ramp"].astype(bool)]
             if len(on) and len(g):
                 ax.plot(g["v_slip"].iloc[-1], g["mu"].iloc[-1], "o", color="k", ms=3, zorder=5)
-        same = onsets[rows_matching(onsets, group) & (onsets["outcome"] == "steady") & onsets["velocity"].notna()]
+        same = onsets[rows_matching(onsets, group) & (onsets["outcome"] == STEADY) & onsets["velocity"].notna()]
         for _, r in same.iterrows():
             ax.plot(r["velocity"], r["mu_a"], "o", mfc="none", mec=colors.get(r["theta"], "0.3"), ms=6, zorder=6)
         ax.set_xscale("log")

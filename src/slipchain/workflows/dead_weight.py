@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import numpy as np
 
 from ..analysis.statistics import ratios_to_first
+from ..analysis.traces import HELD  # an evaluation's status with ``held`` on: undecided, but ended on the rising branch (run_outcome)
 from ..engine.backends import BackendName
 from ..engine.simulate import run
 from ..model.config import Config, ConfigError, make_config
@@ -65,7 +66,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
 TOL = 0.005  # the resolution of mu_max
 BRACKET = "bracket"  # status of a realisation whose runs at lo or hi did not bracket mu_max
-HELD = "held"  # an evaluation's status with ``held`` on: undecided, but ended on the rising branch (run_outcome)
 
 
 class BracketError(ValueError):

@@ -160,7 +160,9 @@ def _status(ev: "pd.DataFrame") -> tuple[str, tuple[str, ...]]:
     """The column that classifies a table's runs and the values that bound mu_max from below: the runs'
     ``outcome`` where the table has one (``slipchain figure traces``' onsets.csv: steady or held,
     :func:`slipchain.analysis.traces.run_outcome`), else the tester's ``velocity_status`` (steady only)."""
-    return ("outcome", ("steady", "held")) if "outcome" in ev.columns else ("velocity_status", ("ok",))
+    from ..analysis.traces import BELOW
+
+    return ("outcome", BELOW) if "outcome" in ev.columns else ("velocity_status", ("ok",))
 
 
 def _interval(ev: "pd.DataFrame", theta: float) -> tuple[float, float]:
@@ -178,11 +180,12 @@ def _bounds(ev: "pd.DataFrame", theta: float) -> str:
     """What the dead-weight runs at one load say about mu_max: the largest steady (and held) mu_a, the
     smallest runaway one, and those that decided nothing (not steady within t_max, failed, or not run yet: a
     store's member without a run file, :data:`.dead_weight.NOT_RUN`)."""
+    from ..analysis.traces import HELD, STEADY
     from .dead_weight import outcome
 
     ev = ev[np.isclose(ev["theta"], theta)]
     status, lower = _status(ev)
-    named = {"ok": "steady", "steady": "steady", "held": "held"}
+    named = {"ok": STEADY, STEADY: STEADY, HELD: HELD}
     parts = []
     for s in lower:
         m = ev[ev[status] == s]["mu_a"]
