@@ -46,9 +46,12 @@ CATALOGUE: dict[str, Study] = {
                           "(implicit)"),
     "fig6-3d-eps1-128": Study("study", 48, "over 10 h (est.: theta = 1 ~8x fig6-3d-eps1 per run, theta = 0.05 more)", "docs/fig6-3d-eps1/index.md",
                               "fig6-3d-eps1 on the 128 x 128 interface of issue 27 (run in parts: it resumes)"),
-    "fig6-3d-eps1-128-fast": Study("study", 48, "all 48 run: 42 873 CPU-s (11.9 CPU-hours, 6 hours on 2 cores), 49-2 876 s a run (Zen 5, Xeon and EPYC cores)", "docs/fig6-3d-eps1/index.md",
+    "fig6-3d-eps1-128-fast": Study("study", 48, "78 min on 2 cores (re-measured 2026-12-07 in one sweep: 9 305 CPU-s, 11-401 s a run, Xeon; first run 42 873 CPU-s at Dask's allocator setting)", "docs/fig6-3d-eps1/index.md",
                                    "fig6-3d-eps1-128 with each point's fastest stepper (TR-BDF2 on the slab, adaptive "
                                    "on chain2d at low load)"),
+    "fig6-3d-eps1-128-fast2": Study("study", 48, "8 516 CPU-s, about 71 min on 2 cores (44 members reused from the re-measured fast preset, 4 run anew; Xeon)", "docs/fig6-3d-eps1/index.md",
+                                    "fig6-3d-eps1-128-fast with chain2d at theta = 0.2 on backward Euler (2.3-2.9x faster "
+                                    "there than the adaptive step at 128 x 128)"),
     "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
                                  "fig6-3d-eps1 in rubber at v_d1: the 64 x 64 rubber slab at epsilon = 1 (implicit)"),
     "fig6-rubber": Study("study", 144, "10 min", "docs/fig6-rubber/index.md",
