@@ -10,6 +10,8 @@ the energy balance, the drive force's largest and rms difference from the adapti
 
     .venv/bin/python benchmarks/bench_trbdf2.py --geometry slab --L 64 --theta 0.05 --t 0.1
     .venv/bin/python benchmarks/bench_trbdf2.py --geometry chain2d --L 64 --theta 0.05 --t 0.1 --preconditioner additive
+    .venv/bin/python benchmarks/bench_trbdf2.py --geometry chain2d --L 128 --theta 0.2 --v-d 1e-3 --dt 5e-8 --t 0.05 \
+        --variants adaptive backward-euler   # fig6-3d-eps1-128-fast2's choice at theta = 0.2
 """
 
 from __future__ import annotations
@@ -33,13 +35,14 @@ def main() -> None:
     ap.add_argument("--theta", type=float, default=0.05)
     ap.add_argument("--v-d", type=float, default=1e-3)
     ap.add_argument("--t", type=float, default=0.1, help="simulated seconds")
+    ap.add_argument("--dt", type=float, default=1e-7, help="base step (s); the fig6-3d-eps1 presets take 5e-8 at v_d1, theta <= 0.2")
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--preconditioner", default="jacobi", choices=["jacobi", "additive"],
                     help="krylov_preconditioner of the two implicit variants")
     args = ap.parse_args()
     cfg = dict(geometry=args.geometry, N=args.L, Ly=args.L, N_L=5, theta=args.theta, eta_c=1e5, v_d=args.v_d,
-               start="steady", dt=1e-7, epsilon=1.0, seed=0, output_interval=1e-3, t_total=args.t)
+               start="steady", dt=args.dt, epsilon=1.0, seed=0, output_interval=1e-3, t_total=args.t)
     if args.preconditioner != "jacobi":
         for name in VARIANTS:
             if VARIANTS[name]["integrator"] == "implicit":
@@ -54,7 +57,7 @@ def main() -> None:
             last[name] = run(dict(cfg, **VARIANTS[name]))
             walls[name].append(time.perf_counter() - t0)
     print(f"# {platform.processor() or platform.machine()}; {args.geometry} {args.L} x {args.L}, epsilon = 1, theta = "
-          f"{args.theta:g}, v_d = {args.v_d:g}, {args.t:g} s simulated, {args.repeat} alternating repeat(s), "
+          f"{args.theta:g}, v_d = {args.v_d:g}, dt = {args.dt:g} s, {args.t:g} s simulated, {args.repeat} alternating repeat(s), "
           f"krylov_preconditioner {args.preconditioner}")
     ref = last[args.variants[0]].f_d.values
     scale = np.abs(ref).max()
