@@ -16,6 +16,11 @@ sweep over integrators compares with itself (issue 27), with the pairs broken do
 ``--by geometry v_d`` groups the table by other coordinates (text ones too), e.g. a study rerun beside its old store:
 
     .venv/bin/python benchmarks/compare_stores.py OLD NEW --by geometry v_d --csv pairs.csv
+
+``--ignore output_interval`` leaves coordinates out of the matching (a variant that swept one beside a store that did not):
+
+    .venv/bin/python benchmarks/compare_stores.py results/fig6-3d-eps1-128-remeasure results/fig6-3d-eps1-128-fast3 \
+        --by geometry v_d --ignore output_interval
 """
 
 from __future__ import annotations
@@ -36,10 +41,10 @@ def _split(arg: str) -> tuple[Path, str | None]:
     return Path(path), integrator or None
 
 
-def _rows(store: Path, integrator: str | None = None) -> dict[tuple, dict]:
+def _rows(store: Path, integrator: str | None = None, ignore: frozenset = frozenset()) -> dict[tuple, dict]:
     with (store / "index.csv").open() as fh:
         rows = [r for r in csv.DictReader(fh) if integrator is None or r.get("integrator") == integrator]
-    keys = [k for k in rows[0] if k not in OWN]
+    keys = [k for k in rows[0] if k not in OWN and k not in ignore]
     top = max(float(r["dt"]) for r in rows) if "dt" in rows[0] else None
 
     def key(r):
@@ -73,9 +78,11 @@ def main() -> None:
     ap.add_argument("b", help="STORE or STORE@INTEGRATOR")
     ap.add_argument("--csv", type=Path)
     ap.add_argument("--by", nargs="+", default=["epsilon"], help="coordinates whose values group the summary table")
+    ap.add_argument("--ignore", nargs="+", default=[], help="coordinates left out of the matching (a store that swept "
+                    "output_interval beside one that did not)")
     args = ap.parse_args()
     (pa, ia), (pb, ib) = _split(args.a), _split(args.b)
-    ra, rb = _rows(pa, ia), _rows(pb, ib)
+    ra, rb = _rows(pa, ia, frozenset(args.ignore)), _rows(pb, ib, frozenset(args.ignore))
     common = sorted(set(ra) & set(rb))
     z = np.array([(float(ra[k]["mu_star"]) - float(rb[k]["mu_star"]))
                   / np.hypot(float(ra[k]["mu_star_sem"]), float(rb[k]["mu_star_sem"])) for k in common])
