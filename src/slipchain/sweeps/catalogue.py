@@ -52,7 +52,7 @@ CATALOGUE: dict[str, Study] = {
     "fig6-3d-eps1-128-fast2": Study("study", 48, "8 516 CPU-s, about 71 min on 2 cores (44 members reused from the re-measured fast preset, 4 run anew; Xeon)", "docs/fig6-3d-eps1/index.md",
                                     "fig6-3d-eps1-128-fast with chain2d at theta = 0.2 on backward Euler (2.3-2.9x faster "
                                     "there than the adaptive step at 128 x 128)"),
-    "fig6-3d-eps1-128-fast3": Study("study", 48, "60.3 min on 2 cores (3 616 s in one sweep 2026-12-07, 7 201 CPU-s, 13-350 s a run; Xeon)", "docs/fig6-3d-eps1/index.md",
+    "fig6-3d-eps1-128-fast3": Study("study", 48, "60.3 min on 2 cores (3 616 s in one sweep 2026-12-07, 7 201 CPU-s, 11-424 s a run; Xeon)", "docs/fig6-3d-eps1/index.md",
                                     "fig6-3d-eps1-128-fast2 with 5-ms samples at theta >= 0.5 (the implicit stepper's "
                                     "step ends within its sample: 1.15-3.7x faster there)"),
     "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
