@@ -82,7 +82,7 @@ CATALOGUE: dict[str, Study] = {
                               "the epsilon = 1 rung to the end: runs of 3 s, runaways stopped, held runs below"),
     "ladder-eps1-slow-held": Study("plan", 56, "30 min (22-93 s a run)", "docs/ladder/index.md",
                                    "rung 3s to the end: the 2-s ramp, runaways stopped, held runs below, four loads"),
-    "ladder-eps1-slow20-held": Study("plan", 56, "not finished: est. 5-6 h (510-880 s a run by the 20-s grid; resumes)", "docs/ladder/index.md",
+    "ladder-eps1-slow20-held": Study("plan", 56, "not finished: about 7 h (its first 8 runs 735-1 080 s each, two at a time, Xeon; resumes)", "docs/ladder/index.md",
                                      "the ladder's rung 3s with a 20-s ramp (runs of 24 s, two seeds): the chain's slow-loading limit"),
     "ladder-eps1-slow6-held": Study("plan", 56, "98 min (90-240 s a run)", "docs/ladder/index.md",
                                     "rung 3s-6b: the 6-s ramp by bisection, runs of 10 s, held runs below, four loads"),
