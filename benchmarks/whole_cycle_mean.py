@@ -1,9 +1,9 @@
 """mu_star against the mean of f_d over whole slip cycles, for runs that stick-slip as a whole (issue 27).
 
-For each member of the given stores at the given geometry, theta and v_d: the slip events (drops of f_d below 0.3
-of the largest drop, merged within 5 samples), the mean of f_d from the first event after ``--after`` seconds to the
-last (whole cycles), scaled as mu_star is (mu_star over the mean of f_d in its steady window), beside mu_star and the
-mean period. Two stores of one study with different output samples (fig6-3d-eps1-128-fast2 and -fast3) give the
+For each member of the given stores at the given geometry, theta and v_d: in mu_star's steady window (MSER), the
+mean of f_d over whole cycles (:func:`slipchain.results.observables.whole_cycle_mean`, from the first slip event, a
+fall counted by ``count_cycles``, to the last), scaled as mu_star is (mu_star over the mean of f_d in its steady
+window), beside mu_star and the mean period between the falls. Two stores of one study with different output samples (fig6-3d-eps1-128-fast2 and -fast3) give the
 same whole-cycle means and different mu_star: the steady window's phase (docs/performance.md, "Samples of 5 ms").
 
     .venv/bin/python benchmarks/whole_cycle_mean.py results/fig6-3d-eps1-128-fast2 results/fig6-3d-eps1-128-fast3 \
@@ -18,20 +18,18 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from slipchain.results.observables import steady_estimate
+from slipchain.results.observables import cycle_falls, steady_estimate, whole_cycle_mean
 
 
-def whole_cycles(ds: xr.Dataset, after: float) -> tuple[int, float, float, float]:
-    """(events, whole-cycle mean in mu_star's units, mu_star, mean period) of one member."""
+def whole_cycles(ds: xr.Dataset) -> tuple[int, float, float, float]:
+    """(slip events, whole-cycle mean in mu_star's units, mu_star, mean period) of one member."""
     t, f = ds.time.values, ds.f_d.values
-    d = np.diff(f)
-    idx = np.flatnonzero(d < 0.3 * d.min())
-    events = [i for k, i in enumerate(idx) if k == 0 or i - idx[k - 1] > 5]
-    late = [e for e in events if t[e] > after]
-    a, b = late[0] + 1, late[-1] + 1
+    start = steady_estimate(f).start
+    window, tw = f[start:], t[start:]
+    falls = cycle_falls(window)
     mu = float(ds.attrs["mu_star"])
-    scale = mu / f[steady_estimate(f).start:].mean()
-    return len(events), float(f[a:b].mean() * scale), mu, float(np.diff(t[events]).mean())
+    scale = mu / window.mean()
+    return int(falls.size), whole_cycle_mean(window) * scale, mu, float(np.diff(tw[falls]).mean())
 
 
 def main() -> None:
@@ -40,7 +38,6 @@ def main() -> None:
     ap.add_argument("--geometry", default="chain2d")
     ap.add_argument("--theta", type=float, default=1.0)
     ap.add_argument("--v-d", type=float, default=1e-3)
-    ap.add_argument("--after", type=float, default=2.0, help="the first event counted after this time (s)")
     args = ap.parse_args()
     for store in args.stores:
         for path in sorted((store / "members").glob("*.nc")):
@@ -49,7 +46,7 @@ def main() -> None:
                 if (a["geometry"] != args.geometry or abs(float(a["theta"]) - args.theta) > 1e-3
                         or float(a["v_d"]) != args.v_d):
                     continue
-                n, whole, mu, period = whole_cycles(ds, args.after)
+                n, whole, mu, period = whole_cycles(ds)
                 print(f"{store.name} seed {int(a['seed'])}: {n} events, whole-cycle mean {whole:.5f}, mu_star {mu:.5f}, "
                       f"period {period:.4f} s")
 

@@ -80,3 +80,25 @@ def test_sawtooth_of_system_wide_stick_slip_and_of_steady_sliding():
     assert list(table["geometry"]) == ["chain2d", "slab"] and list(table["n"]) == [1, 2]
     assert table.set_index("geometry").loc["slab", "cycles"] == 22
     assert list(table["whole"]) == [False, True] and WHOLE_SLIP_SHARE < 1.0
+
+
+def test_whole_cycle_mean_of_a_sawtooth_is_its_mean_where_a_cut_window_is_not():
+    """A sawtooth y = frac(t) (mean 1/2 over whole cycles) seen through a window that starts and ends mid-cycle:
+    the plain mean is biased by the partial cycles (analytically, for 0.3 ... 7.9: (sum of whole teeth 6 x 1/2 +
+    the partial ones) / 7.6), the mean over whole cycles is 1/2 to the sampling; the falls are the teeth's drops,
+    as many as count_cycles counts (also on noise)."""
+    from slipchain.results.observables import count_cycles, cycle_falls, whole_cycle_mean
+
+    n = 1000  # samples per tooth
+    t = np.arange(int(0.3 * n), int(7.9 * n)) / n
+    y = t % 1.0
+    plain = (0.5 * (1 - 0.3**2) + 6 * 0.5 + 0.5 * 0.9**2) / 7.6  # exact integral of frac(t) over [0.3, 7.9] / 7.6
+    assert abs(y.mean() - plain) < 1e-3 and abs(plain - 0.5) > 0.0075  # 0.0079: the partial teeth
+    assert abs(whole_cycle_mean(y) - 0.5) < 1e-3
+    falls = cycle_falls(y)
+    assert falls.size == count_cycles(y) == 7 and np.all(y[falls] < 0.3) and np.all(y[falls - 1] > 0.7)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        noise = rng.standard_normal(rng.integers(2, 400))
+        assert cycle_falls(noise).size == count_cycles(noise)
+    assert np.isnan(whole_cycle_mean(np.ones(10))) and cycle_falls(np.ones(1)).size == 0
