@@ -18,19 +18,19 @@ from __future__ import annotations
 
 import argparse
 import platform
+import sys
 import time
+from pathlib import Path
 
 from slipchain import run
+
+sys.path.insert(0, str(Path(__file__).parent))
+from fig6_3d_point import add_point_arguments, point_config  # noqa: E402
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--geometry", default="slab", choices=["slab", "halfspace", "chain2d"])
-    ap.add_argument("--L", type=int, default=128)
-    ap.add_argument("--theta", type=float, default=1.0)
-    ap.add_argument("--v-d", type=float, default=1e-3)
-    ap.add_argument("--dt", type=float, default=1e-7, help="base step (s); the fig6-3d-eps1 presets take 5e-8 at v_d1, theta <= 0.2")
-    ap.add_argument("--t", type=float, default=1.0, help="simulated seconds")
+    add_point_arguments(ap, L=128, theta=1.0, t=1.0)
     ap.add_argument("--scheme", default="backward-euler", choices=["backward-euler", "trbdf2", "adaptive"],
                     help="implicit_scheme of integrator 'implicit', or the explicit adaptive step")
     ap.add_argument("--preconditioner", default="jacobi", choices=["jacobi", "additive"])
@@ -38,8 +38,7 @@ def main() -> None:
     args = ap.parse_args()
     stepper = (dict(integrator="adaptive") if args.scheme == "adaptive" else
                dict(integrator="implicit", implicit_scheme=args.scheme, krylov_preconditioner=args.preconditioner))
-    cfg = dict(geometry=args.geometry, N=args.L, Ly=args.L, N_L=5, theta=args.theta, eta_c=1e5, v_d=args.v_d,
-               start="steady", dt=args.dt, epsilon=1.0, seed=0, **stepper)
+    cfg = dict(point_config(args), **stepper)
     for oi in args.intervals:
         run(dict(cfg, output_interval=oi, t_total=2e-2))
     print(f"# {platform.processor() or platform.machine()}; {args.geometry} {args.L} x {args.L}, epsilon = 1, theta = "

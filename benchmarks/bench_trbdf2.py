@@ -18,11 +18,16 @@ from __future__ import annotations
 
 import argparse
 import platform
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from slipchain import run
+
+sys.path.insert(0, str(Path(__file__).parent))
+from fig6_3d_point import add_point_arguments, point_config  # noqa: E402
 
 VARIANTS = {"adaptive": dict(integrator="adaptive"), "backward-euler": dict(integrator="implicit"),
             "trbdf2": dict(integrator="implicit", implicit_scheme="trbdf2")}
@@ -30,19 +35,13 @@ VARIANTS = {"adaptive": dict(integrator="adaptive"), "backward-euler": dict(inte
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--geometry", default="slab", choices=["slab", "halfspace", "chain2d"])
-    ap.add_argument("--L", type=int, default=32)
-    ap.add_argument("--theta", type=float, default=0.05)
-    ap.add_argument("--v-d", type=float, default=1e-3)
-    ap.add_argument("--t", type=float, default=0.1, help="simulated seconds")
-    ap.add_argument("--dt", type=float, default=1e-7, help="base step (s); the fig6-3d-eps1 presets take 5e-8 at v_d1, theta <= 0.2")
+    add_point_arguments(ap, L=32, theta=0.05, t=0.1)
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--preconditioner", default="jacobi", choices=["jacobi", "additive"],
                     help="krylov_preconditioner of the two implicit variants")
     args = ap.parse_args()
-    cfg = dict(geometry=args.geometry, N=args.L, Ly=args.L, N_L=5, theta=args.theta, eta_c=1e5, v_d=args.v_d,
-               start="steady", dt=args.dt, epsilon=1.0, seed=0, output_interval=1e-3, t_total=args.t)
+    cfg = dict(point_config(args), output_interval=1e-3, t_total=args.t)
     if args.preconditioner != "jacobi":
         for name in VARIANTS:
             if VARIANTS[name]["integrator"] == "implicit":
