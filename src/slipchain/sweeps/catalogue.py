@@ -55,7 +55,7 @@ CATALOGUE: dict[str, Study] = {
     "fig6-3d-eps1-128-fast3": Study("study", 48, "60.3 min on 2 cores (3 616 s in one sweep 2026-12-07, 7 201 CPU-s, 11-424 s a run; Xeon)", "docs/fig6-3d-eps1/index.md",
                                     "fig6-3d-eps1-128-fast2 with 5-ms samples at theta >= 0.5 (the implicit stepper's "
                                     "step ends within its sample: 1.15-3.7x faster there)"),
-    "fig6-3d-eps1-128-fast4": Study("study", 48, "(being measured)", "docs/fig6-3d-eps1/index.md",
+    "fig6-3d-eps1-128-fast4": Study("study", 48, "59.2 min on 2 cores (3 554 s in one sweep 2026-12-07, 6 913 CPU-s, 10-418 s a run; Xeon)", "docs/fig6-3d-eps1/index.md",
                                     "fig6-3d-eps1-128-fast3 with chain2d at theta = 0.1, v_d2 on backward Euler "
                                     "(additive; 1.60x) and at theta = 0.2, v_d2 with 2-ms samples (1.25x)"),
     "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
