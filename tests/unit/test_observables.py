@@ -65,6 +65,11 @@ def test_sawtooth_of_system_wide_stick_slip_and_of_steady_sliding():
     assert s["period"] == pytest.approx((t[-1] - t[0]) / 11)
     assert s["swing"] == pytest.approx(1.96, abs=0.02)
     assert s["event_share"] == pytest.approx(1.0)
+    # over whole cycles the tooth 2k/per (k = 0 .. per-1) averages (per-1)/per; the window (cut mid-tooth at both
+    # ends: up to 249/250 at the start, to 240/250 at the end) averages otherwise, and phase_bias is the difference
+    # over that: -0.26 % here
+    assert s["phase_bias"] == pytest.approx(f.mean() / ((per - 1) / per) - 1.0, rel=1e-12)
+    assert abs(s["phase_bias"]) > 1e-3
     # the transient is left out: the window starts on the 6th fall (t = 1.5 s), so 5 falls remain after it
     assert sawtooth(_run(t, f, x, t_transient=1.499))["cycles"] == 5
 
@@ -74,12 +79,14 @@ def test_sawtooth_of_system_wide_stick_slip_and_of_steady_sliding():
     assert steady["swing"] == pytest.approx(4.65 * 0.01, rel=0.1)  # 2 x 2.326 standard deviations
     assert steady["event_share"] == pytest.approx(0.5, abs=0.03)  # half the samples fall
     assert steady["cycles"] > 200  # noise crosses the trigger levels every few samples
+    assert abs(steady["phase_bias"]) < 1e-3  # noise has no phase: its mean over whole 'cycles' is its mean
 
     table = sawtooth_table([dict(geometry="slab", theta=1.0, v_d=1e-3, seed=k, **s) for k in (0, 1)]
                            + [dict(geometry="chain2d", theta=1.0, v_d=1e-3, seed=0, **steady)])
     assert list(table["geometry"]) == ["chain2d", "slab"] and list(table["n"]) == [1, 2]
     assert table.set_index("geometry").loc["slab", "cycles"] == 22
     assert list(table["whole"]) == [False, True] and WHOLE_SLIP_SHARE < 1.0
+    assert table.set_index("geometry").loc["slab", "phase_bias"] == pytest.approx(s["phase_bias"])
 
 
 def test_whole_cycle_mean_of_a_sawtooth_is_its_mean_where_a_cut_window_is_not():

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from ..results.observables import count_cycles
+from ..results.observables import count_cycles, whole_cycle_mean
 from ..results.schema import Status
 from .statistics import base_config, drive_velocities, ratio, seed_average
 
@@ -104,19 +104,26 @@ def sawtooth(run: xr.Dataset) -> dict[str, float]:
     for a sawtooth that falls to zero, near 0 for steady sliding; ``event_share``: the share of the
     interface's advance (``x_mean``, the mean interface block displacement) made in the samples in which
     f_d falls, about 1/2 for noise about a mean and 1 where all motion happens in the slip events (at or
-    above :data:`WHOLE_SLIP_SHARE`: the whole interface slips together)."""
+    above :data:`WHOLE_SLIP_SHARE`: the whole interface slips together); ``phase_bias``: the window's mean of f_d
+    (mu_star's: the window is the same) over its mean over whole cycles
+    (:func:`slipchain.results.observables.whole_cycle_mean`) less 1, NaN with fewer than two falls. Where the whole
+    interface stick-slips the window cuts the sawtooth at some phase, which moves mu_star by up to about
+    swing/(2 cycles), an error its batch-means SE does not hold (docs/performance.md, "Samples of 5 ms"); this
+    column says by how much, per point."""
     t = run["time"].values
     keep = t > float(run.attrs.get("t_transient", 0.0))
     f, x, t = run["f_d"].values[keep], run["x_mean"].values[keep], t[keep]
     if f.size < 3:
-        return {"cycles": 0, "period": float("nan"), "swing": float("nan"), "event_share": float("nan")}
+        return {"cycles": 0, "period": float("nan"), "swing": float("nan"), "event_share": float("nan"),
+                "phase_bias": float("nan")}
     cycles = count_cycles(f)
     lo, hi = np.percentile(f, [1, 99])
     dx, falling = np.diff(x), np.diff(f) < 0
     advance = dx.sum()
     return {"cycles": cycles, "period": (t[-1] - t[0]) / cycles if cycles else float("nan"),
             "swing": float((hi - lo) / f.mean()),
-            "event_share": float(dx[falling].sum() / advance) if advance > 0 else float("nan")}
+            "event_share": float(dx[falling].sum() / advance) if advance > 0 else float("nan"),
+            "phase_bias": float(f.mean() / whole_cycle_mean(f) - 1.0)}
 
 
 def sawtooth_table(rows: list[dict]) -> pd.DataFrame:
@@ -124,11 +131,11 @@ def sawtooth_table(rows: list[dict]) -> pd.DataFrame:
     keys, ``seed`` and the stats; ``cycles`` is summed over the seeds, ``n`` counts them."""
     if not rows:
         return pd.DataFrame(columns=["geometry", "theta", "v_d", "n", "cycles", "period", "swing", "event_share",
-                                     "whole"])
+                                     "phase_bias", "whole"])
     frame = pd.DataFrame(rows)
     out = frame.groupby(["geometry", "theta", "v_d"], sort=False).agg(
         n=("seed", "size"), cycles=("cycles", "sum"), period=("period", "mean"), swing=("swing", "mean"),
-        event_share=("event_share", "mean")).reset_index()
+        event_share=("event_share", "mean"), phase_bias=("phase_bias", "mean")).reset_index()
     out["whole"] = out["event_share"] >= WHOLE_SLIP_SHARE
     order = {g: i for i, g in enumerate(GEOMETRY_ORDER)}
     return out.sort_values(["geometry", "v_d", "theta"], key=lambda c: c.map(order) if c.name == "geometry"
@@ -155,6 +162,10 @@ def _points_text(points: list[tuple[str, float, float]]) -> str:
     return "; ".join(f"{geo}, {v_d:g}: {', '.join(f'{t:g}' for t in sorted(ths))}"
                      for (geo, v_d), ths in sorted(groups.items(), key=lambda kv: (GEOMETRY_ORDER.index(kv[0][0]),
                                                                                    -kv[0][1])))
+
+
+def _pct(x: float) -> str:
+    return "" if np.isnan(x) else f"{100 * x:+.2f}"
 
 
 def _fmt(mu: float, err: float) -> str:
@@ -223,13 +234,17 @@ def report_markdown(table: pd.DataFrame, drop: pd.DataFrame, attrs: dict, *, com
                   "summed): the period is the window over the cycles; the swing is f_d's 1st-99th percentile range "
                   "over its mean (about 2 for a sawtooth falling to zero, near 0 for steady sliding); the event "
                   "share is the share of the interface's advance made in the samples in which f_d falls (1/2 for "
-                  f"noise, 1 when every block moves only in the events; 'whole' at {WHOLE_SLIP_SHARE:g} or more).",
-                  "", "| geometry | v_d | theta | seeds | cycles | period (s) | swing | event share | slips as a whole |",
-                  "|---|---|---|---|---|---|---|---|---|"]
+                  f"noise, 1 when every block moves only in the events; 'whole' at {WHOLE_SLIP_SHARE:g} or more). "
+                  "The window's phase is the window's mean of f_d (mu_star's) over its mean over whole cycles, less 1 "
+                  "(`observables.whole_cycle_mean`): where the whole interface slips, the part of mu_star that the "
+                  "window's cut through the sawtooth adds, which mu_star's standard error does not hold.",
+                  "", "| geometry | v_d | theta | seeds | cycles | period (s) | swing | event share | slips as a whole "
+                  "| window's phase (%) |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
         for _, r in saw.iterrows():
             lines.append(f"| {r['geometry']} | {r['v_d']:g} | {r['theta']:g} | {int(r['n'])} | {int(r['cycles'])} | "
                          f"{r['period']:.3g} | {r['swing']:.2f} | {r['event_share']:.2f} | "
-                         f"{'yes' if r['whole'] else 'no'} |")
+                         f"{'yes' if r['whole'] else 'no'} | {_pct(r['phase_bias'])} |")
         lines.append("")
     bad = attrs.get("not_completed")
     if bad is not None and len(bad):
