@@ -57,7 +57,8 @@ CATALOGUE: dict[str, Study] = {
                                     "step ends within its sample: 1.15-3.7x faster there)"),
     "fig6-3d-eps1-128-fast4": Study("study", 48, "59.2 min on 2 cores (3 554 s in one sweep 2026-12-07, 6 913 CPU-s, 10-418 s a run; Xeon)", "docs/fig6-3d-eps1/index.md",
                                     "fig6-3d-eps1-128-fast3 with chain2d at theta = 0.1, v_d2 on backward Euler "
-                                    "(additive; 1.60x) and at theta = 0.2, v_d2 with 2-ms samples (1.25x)"),
+                                    "(additive; 1.60x) and the slab at theta = 1 and 0.7, v_d1 with 10-ms samples "
+                                    "(1.11-1.22x)"),
     "fig6-3d-eps1-rubber": Study("study", 8, "30 min", "docs/fig6-3d-eps1-rubber/index.md",
                                  "fig6-3d-eps1 in rubber at v_d1: the 64 x 64 rubber slab at epsilon = 1 (implicit)"),
     "fig6-rubber": Study("study", 144, "10 min", "docs/fig6-rubber/index.md",
